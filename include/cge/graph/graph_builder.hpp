@@ -1,0 +1,353 @@
+#pragma once
+// GraphBuilder: the frame graph of ALGORITHMS.md section 3, built for one frame with respect to a
+// partner frame (stability depends on both frames' dynamic masks).
+//
+// Determinism: the output depends only on the input values, never on their order (nodes are put
+// in canonical order first) nor on the neighbour-search policy. build() is const and re-entrant: it
+// works on a copy of the configured policy and keeps no state between calls.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "cge/core/image_region.hpp"
+#include "cge/core/mask.hpp"
+#include "cge/core/point_traits.hpp"
+#include "cge/core/semantic_instance.hpp"
+#include "cge/graph/graph.hpp"
+#include "cge/graph/neighbor_search.hpp"
+
+namespace cge {
+
+template <typename Scalar>
+struct GraphBuilderSettings {
+  /// Patch grid over the image (paper: 10 x 10).
+  int patch_cols = 10;
+  int patch_rows = 10;
+  /// N_th: a patch with MORE than this many stable features is dense and is replaced by one
+  /// representation point at its centre. Our default (the paper gives no value): about 1.5 times
+  /// the mean per patch for 1000 features on 10 x 10 patches.
+  int dense_patch_threshold = 15;
+  /// R, the base connection radius, as a fraction of the image diagonal (5% = 40 px at 640 x 480).
+  Scalar radius_fraction_of_diagonal = Scalar(0.05);
+  /// From this round on a centre's radius grows at most to capped_radius_multiple * R.
+  int first_capped_round = 3;
+  Scalar capped_radius_multiple = Scalar(3);
+  /// Safety stop for pathological input; the construction needs at most |V| rounds.
+  int max_rounds = std::numeric_limits<int>::max();
+};
+
+/// Nodes before edges: what build_nodes() returns and build_edges() consumes.
+template <typename Scalar>
+struct FrameNodes {
+  std::vector<Eigen::Matrix<Scalar, 2, 1>> positions;  ///< canonical order: by (y, x, kind)
+  std::vector<NodeKind> kinds;
+};
+
+template <typename Scalar = double, typename NeighborSearch = GridNeighborSearch<Scalar>>
+class GraphBuilder {
+ public:
+  using Point = Eigen::Matrix<Scalar, 2, 1>;
+  using Settings = GraphBuilderSettings<Scalar>;
+
+  Settings settings;
+  /// Configured prototype of the neighbour-search policy; copied by every build().
+  NeighborSearch neighbor_search;
+
+  GraphBuilder() = default;
+  explicit GraphBuilder(const Settings& s, NeighborSearch ns = NeighborSearch()) : settings(s), neighbor_search(std::move(ns)) {}
+
+  /// Full construction. `keypoints` is any range of point types adapted by cge::traits::Point2;
+  /// the masks are any types adapted by cge::traits::Mask (an empty mask means no dynamic objects);
+  /// `instances` are this frame's semantic instances, of which the static ones become nodes.
+  /// A keypoint is stable when its pixel (coordinates rounded to the nearest integer, relative to
+  /// the region's origin) is set in neither mask.
+  /// Throws std::invalid_argument for keypoints or instance centres outside the region or not
+  /// finite, masks of the wrong size, or bad settings.
+  template <typename Keypoints, typename OwnMask, typename PartnerMask>
+  Graph<Scalar> build(const ImageRegion<Scalar>& image, const Keypoints& keypoints, const OwnMask& own_dynamic_mask,
+                      const PartnerMask& partner_dynamic_mask,
+                      const std::vector<SemanticInstance<Scalar>>& instances) const {
+    return build_edges(image, build_nodes(image, keypoints, own_dynamic_mask, partner_dynamic_mask, instances));
+  }
+
+  /// Same as build() with no masks: every keypoint counts as stable.
+  template <typename Keypoints>
+  Graph<Scalar> build(const ImageRegion<Scalar>& image, const Keypoints& keypoints,
+                      const std::vector<SemanticInstance<Scalar>>& instances = {}) const {
+    return build(image, keypoints, NoMask{}, NoMask{}, instances);
+  }
+
+  /// Node selection only: stable features, dense patches, semantic nodes, canonical order, exact
+  /// duplicates merged (the first in canonical order, so the lowest NodeKind, is kept).
+  template <typename Keypoints, typename OwnMask, typename PartnerMask>
+  FrameNodes<Scalar> build_nodes(const ImageRegion<Scalar>& image, const Keypoints& keypoints,
+                                 const OwnMask& own_dynamic_mask, const PartnerMask& partner_dynamic_mask,
+                                 const std::vector<SemanticInstance<Scalar>>& instances) const {
+    validate(image);
+    const int mask_w = static_cast<int>(std::lround(image.width_px));
+    const int mask_h = static_cast<int>(std::lround(image.height_px));
+    check_mask_size(own_dynamic_mask, mask_w, mask_h, "own dynamic mask");
+    check_mask_size(partner_dynamic_mask, mask_w, mask_h, "partner dynamic mask");
+    const bool own_empty = traits::Mask<OwnMask>::empty(own_dynamic_mask);
+    const bool partner_empty = traits::Mask<PartnerMask>::empty(partner_dynamic_mask);
+
+    const int patch_count = settings.patch_cols * settings.patch_rows;
+    std::vector<std::int32_t> patch_of;  // per stable feature
+    std::vector<Point> stable;
+    std::vector<std::int32_t> stable_per_patch(static_cast<std::size_t>(patch_count), 0);
+    const Scalar patch_w = image.width_px / static_cast<Scalar>(settings.patch_cols);
+    const Scalar patch_h = image.height_px / static_cast<Scalar>(settings.patch_rows);
+
+    std::size_t index = 0;
+    for (const auto& kp : keypoints) {
+      const Point p(static_cast<Scalar>(point_x(kp)), static_cast<Scalar>(point_y(kp)));
+      if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !image.contains(p)) {
+        std::ostringstream msg;
+        msg << "GraphBuilder: keypoint #" << index << " at (" << p.x() << ", " << p.y()
+            << ") is not finite or lies outside the image region";
+        throw std::invalid_argument(msg.str());
+      }
+      ++index;
+      const Point rel = p - image.origin_px;
+      if (!own_empty || !partner_empty) {
+        const int col = std::min(static_cast<int>(std::floor(rel.x() + Scalar(0.5))), mask_w - 1);
+        const int row = std::min(static_cast<int>(std::floor(rel.y() + Scalar(0.5))), mask_h - 1);
+        if (!own_empty && traits::Mask<OwnMask>::is_set(own_dynamic_mask, col, row)) continue;
+        if (!partner_empty && traits::Mask<PartnerMask>::is_set(partner_dynamic_mask, col, row)) continue;
+      }
+      const int pc = std::min(static_cast<int>(rel.x() / patch_w), settings.patch_cols - 1);
+      const int pr = std::min(static_cast<int>(rel.y() / patch_h), settings.patch_rows - 1);
+      const std::int32_t patch = pr * settings.patch_cols + pc;
+      stable.push_back(p);
+      patch_of.push_back(patch);
+      ++stable_per_patch[static_cast<std::size_t>(patch)];
+    }
+
+    FrameNodes<Scalar> nodes;
+    nodes.positions.reserve(stable.size() + instances.size() + 16);
+    nodes.kinds.reserve(nodes.positions.capacity());
+    for (int patch = 0; patch < patch_count; ++patch) {
+      if (stable_per_patch[static_cast<std::size_t>(patch)] > settings.dense_patch_threshold) {
+        const int pc = patch % settings.patch_cols;
+        const int pr = patch / settings.patch_cols;
+        nodes.positions.emplace_back(image.origin_px.x() + (static_cast<Scalar>(pc) + Scalar(0.5)) * patch_w,
+                                     image.origin_px.y() + (static_cast<Scalar>(pr) + Scalar(0.5)) * patch_h);
+        nodes.kinds.push_back(NodeKind::representation);
+      }
+    }
+    for (std::size_t i = 0; i < stable.size(); ++i) {
+      if (stable_per_patch[static_cast<std::size_t>(patch_of[i])] <= settings.dense_patch_threshold) {
+        nodes.positions.push_back(stable[i]);
+        nodes.kinds.push_back(NodeKind::feature);
+      }
+    }
+    for (std::size_t i = 0; i < instances.size(); ++i) {
+      const SemanticInstance<Scalar>& inst = instances[i];
+      if (!std::isfinite(inst.centre_px.x()) || !std::isfinite(inst.centre_px.y()) || !image.contains(inst.centre_px)) {
+        std::ostringstream msg;
+        msg << "GraphBuilder: semantic instance #" << i << " has centre (" << inst.centre_px.x() << ", "
+            << inst.centre_px.y() << ") that is not finite or lies outside the image region";
+        throw std::invalid_argument(msg.str());
+      }
+      if (inst.dynamic) continue;
+      nodes.positions.push_back(inst.centre_px);
+      nodes.kinds.push_back(NodeKind::semantic);
+    }
+    canonicalise(nodes);
+    return nodes;
+  }
+
+  /// Edge construction over nodes already in canonical order (as build_nodes returns them).
+  Graph<Scalar> build_edges(const ImageRegion<Scalar>& image, FrameNodes<Scalar> nodes) const {
+    validate(image);
+    const std::int32_t n = static_cast<std::int32_t>(nodes.positions.size());
+    if (nodes.kinds.size() != nodes.positions.size()) {
+      throw std::invalid_argument("GraphBuilder: FrameNodes has different numbers of positions and kinds");
+    }
+    const std::vector<Point>& pts = nodes.positions;
+    std::vector<Edge<Scalar>> edges;
+    std::vector<std::uint8_t> rounds;
+    if (n >= 2) connect(image, pts, edges, rounds);
+    return Graph<Scalar>::from_edges(n, std::move(edges), /*weighted=*/true, std::move(nodes.positions),
+                                     std::move(nodes.kinds), std::move(rounds));
+  }
+
+  /// R in pixels for an image region.
+  Scalar base_radius(const ImageRegion<Scalar>& image) const {
+    return settings.radius_fraction_of_diagonal * image.diagonal();
+  }
+
+ private:
+  void validate(const ImageRegion<Scalar>& image) const {
+    image.validate();
+    if (settings.patch_cols < 1 || settings.patch_rows < 1) {
+      throw std::invalid_argument("GraphBuilderSettings: patch_cols and patch_rows must be at least 1");
+    }
+    if (settings.dense_patch_threshold < 0) {
+      throw std::invalid_argument("GraphBuilderSettings: dense_patch_threshold must not be negative");
+    }
+    if (!(settings.radius_fraction_of_diagonal > 0) || !std::isfinite(settings.radius_fraction_of_diagonal)) {
+      throw std::invalid_argument("GraphBuilderSettings: radius_fraction_of_diagonal must be finite and positive");
+    }
+    if (!(settings.capped_radius_multiple >= 1) || !std::isfinite(settings.capped_radius_multiple)) {
+      throw std::invalid_argument("GraphBuilderSettings: capped_radius_multiple must be finite and at least 1");
+    }
+    if (settings.first_capped_round < 1) {
+      throw std::invalid_argument("GraphBuilderSettings: first_capped_round must be at least 1");
+    }
+  }
+
+  static void canonicalise(FrameNodes<Scalar>& nodes) {
+    const std::size_t n = nodes.positions.size();
+    std::vector<std::uint32_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<std::uint32_t>(i);
+    const auto& p = nodes.positions;
+    const auto& k = nodes.kinds;
+    auto less = [&](std::uint32_t a, std::uint32_t b) {
+      if (p[a].y() != p[b].y()) return p[a].y() < p[b].y();
+      if (p[a].x() != p[b].x()) return p[a].x() < p[b].x();
+      return k[a] < k[b];
+    };
+    std::sort(order.begin(), order.end(), less);
+    FrameNodes<Scalar> out;
+    out.positions.reserve(n);
+    out.kinds.reserve(n);
+    for (std::uint32_t i : order) {
+      if (!out.positions.empty() && out.positions.back() == p[i]) continue;  // exact duplicate
+      out.positions.push_back(p[i]);
+      out.kinds.push_back(k[i]);
+    }
+    nodes = std::move(out);
+  }
+
+  /// The round-based radius search and the stray joins (ALGORITHMS.md section 3).
+  void connect(const ImageRegion<Scalar>& image, const std::vector<Point>& pts, std::vector<Edge<Scalar>>& edges,
+               std::vector<std::uint8_t>& rounds) const {
+    const std::int32_t n = static_cast<std::int32_t>(pts.size());
+    const Scalar radius = base_radius(image);
+    NeighborSearch search = neighbor_search;
+    search.build(pts, radius);
+
+    // Linked adjacency in flat arrays (no allocation per node): head[v] -> slot -> next[slot].
+    std::vector<std::int32_t> head(static_cast<std::size_t>(n), -1);
+    std::vector<std::int32_t> next;
+    std::vector<std::int32_t> target;
+    std::vector<std::int32_t> stamp(static_cast<std::size_t>(n), -1);
+    std::vector<std::uint8_t> flag(static_cast<std::size_t>(n), 0);
+    auto link = [&](std::int32_t a, std::int32_t b) {
+      target.push_back(b);
+      next.push_back(head[a]);
+      head[a] = static_cast<std::int32_t>(target.size()) - 1;
+    };
+
+    // Beyond this radius every node is reachable from any centre, so growing further is pointless.
+    Point lo = pts[0], hi = pts[0];
+    for (const Point& p : pts) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const Scalar span = (hi - lo).norm();
+
+    // v0: the node nearest the image centre; ties go to the lowest canonical index.
+    const Point centre = image.centre();
+    std::int32_t v0 = 0;
+    Scalar best = squared_distance(pts[0], centre);
+    for (std::int32_t i = 1; i < n; ++i) {
+      const Scalar d = squared_distance(pts[static_cast<std::size_t>(i)], centre);
+      if (d < best) {
+        best = d;
+        v0 = i;
+      }
+    }
+    flag[static_cast<std::size_t>(v0)] = 1;
+
+    std::vector<std::int32_t> centres{v0};
+    std::vector<std::int32_t> next_centres;
+    for (int round = 1; !centres.empty() && round <= settings.max_rounds; ++round) {
+      const bool capped = round >= settings.first_capped_round;
+      const std::uint8_t round_tag = static_cast<std::uint8_t>(std::min(round, 255));
+      next_centres.clear();
+      for (const std::int32_t c : centres) {
+        // Mark c's current neighbours so that "already joined" is an O(1) test.
+        for (std::int32_t s = head[static_cast<std::size_t>(c)]; s >= 0; s = next[static_cast<std::size_t>(s)]) {
+          stamp[static_cast<std::size_t>(target[static_cast<std::size_t>(s)])] = c;
+        }
+        stamp[static_cast<std::size_t>(c)] = c;
+        for (int attempt = 1;; ++attempt) {
+          Scalar r = radius * std::ldexp(Scalar(1), attempt - 1);  // 2^(t-1) R
+          if (capped) r = std::min(r, settings.capped_radius_multiple * radius);
+          bool created = false;
+          search.for_each_within(c, r, [&](std::int32_t j) {
+            if (stamp[static_cast<std::size_t>(j)] == c) return;
+            stamp[static_cast<std::size_t>(j)] = c;
+            link(c, j);
+            link(j, c);
+            edges.push_back(Edge<Scalar>{c, j, std::sqrt(squared_distance(pts[static_cast<std::size_t>(c)], pts[static_cast<std::size_t>(j)]))});
+            rounds.push_back(round_tag);
+            created = true;
+            if (!flag[static_cast<std::size_t>(j)]) {
+              flag[static_cast<std::size_t>(j)] = 1;
+              next_centres.push_back(j);
+            }
+          });
+          if (created) break;
+          if (capped && r >= settings.capped_radius_multiple * radius) break;  // nothing within the cap
+          if (r >= span) break;  // every node was in reach; c is joined to all of them
+        }
+      }
+      std::sort(next_centres.begin(), next_centres.end());  // canonical order for the next round
+      centres.swap(next_centres);
+    }
+    join_strays(pts, flag, edges, rounds);
+  }
+
+  /// Joins never-connected nodes, nearest first, each to its nearest node already in the graph
+  /// (ties: smaller distance, then lower stray index, then lower target index). Prim-like, exact.
+  static void join_strays(const std::vector<Point>& pts, std::vector<std::uint8_t>& flag,
+                          std::vector<Edge<Scalar>>& edges, std::vector<std::uint8_t>& rounds) {
+    const std::int32_t n = static_cast<std::int32_t>(pts.size());
+    std::vector<std::int32_t> strays;
+    std::vector<std::int32_t> members;
+    for (std::int32_t i = 0; i < n; ++i) (flag[static_cast<std::size_t>(i)] ? members : strays).push_back(i);
+    if (strays.empty() || members.empty()) return;
+    const Scalar inf = std::numeric_limits<Scalar>::infinity();
+    std::vector<Scalar> best_d(strays.size(), inf);
+    std::vector<std::int32_t> best_to(strays.size(), -1);
+    auto offer = [&](std::size_t s, std::int32_t m) {
+      const Scalar d = squared_distance(pts[static_cast<std::size_t>(strays[s])], pts[static_cast<std::size_t>(m)]);
+      if (d < best_d[s] || (d == best_d[s] && m < best_to[s])) {
+        best_d[s] = d;
+        best_to[s] = m;
+      }
+    };
+    for (std::size_t s = 0; s < strays.size(); ++s) {
+      for (const std::int32_t m : members) offer(s, m);
+    }
+    std::vector<std::uint8_t> done(strays.size(), 0);
+    for (std::size_t joined = 0; joined < strays.size(); ++joined) {
+      std::size_t pick = strays.size();
+      for (std::size_t s = 0; s < strays.size(); ++s) {
+        if (done[s]) continue;
+        if (pick == strays.size() || best_d[s] < best_d[pick]) pick = s;  // strays ascend: ties keep the lower
+      }
+      done[pick] = 1;
+      const std::int32_t a = strays[pick];
+      edges.push_back(Edge<Scalar>{a, best_to[pick], std::sqrt(best_d[pick])});
+      rounds.push_back(kStrayJoin);
+      flag[static_cast<std::size_t>(a)] = 1;
+      for (std::size_t s = 0; s < strays.size(); ++s) {
+        if (!done[s]) offer(s, a);
+      }
+    }
+  }
+};
+
+}  // namespace cge

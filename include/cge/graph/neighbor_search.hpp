@@ -1,0 +1,160 @@
+#pragma once
+// Fixed-radius neighbour search over a frame's node positions: the policy behind GraphBuilder.
+//
+// Contract for a policy NS used as GraphBuilder<Scalar, NS>:
+//   void build(const std::vector<Eigen::Matrix<Scalar, 2, 1>>& points, Scalar typical_radius);
+//       index the points (called once per graph; typical_radius is the base radius R in pixels)
+//   template <class Visit> void for_each_within(std::int32_t query, Scalar radius, Visit&& visit) const;
+//       call visit(j) exactly once for every indexed point j != query with
+//       within_radius(points[query], points[j], radius), in any order.
+// Every policy must decide membership with cge::within_radius and nothing else: that is what makes
+// the graphs of all policies identical, bit for bit. A policy may only skip points it has proved
+// to lie outside the radius.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace cge {
+
+/// The one membership test of every neighbour search: squared Euclidean distance <= radius^2,
+/// computed the same way everywhere so that all policies agree to the last bit.
+template <typename Scalar>
+inline bool within_radius(const Eigen::Matrix<Scalar, 2, 1>& a, const Eigen::Matrix<Scalar, 2, 1>& b,
+                          Scalar radius) {
+  const Scalar dx = a.x() - b.x();
+  const Scalar dy = a.y() - b.y();
+  return dx * dx + dy * dy <= radius * radius;
+}
+
+/// Squared Euclidean distance, computed as in within_radius.
+template <typename Scalar>
+inline Scalar squared_distance(const Eigen::Matrix<Scalar, 2, 1>& a, const Eigen::Matrix<Scalar, 2, 1>& b) {
+  const Scalar dx = a.x() - b.x();
+  const Scalar dy = a.y() - b.y();
+  return dx * dx + dy * dy;
+}
+
+/// O(n) per query. The reference every other policy is tested against.
+template <typename Scalar>
+class BruteForceNeighborSearch {
+ public:
+  using Point = Eigen::Matrix<Scalar, 2, 1>;
+
+  void build(const std::vector<Point>& points, Scalar /*typical_radius*/) { points_ = &points; }
+
+  template <typename Visit>
+  void for_each_within(std::int32_t query, Scalar radius, Visit&& visit) const {
+    const std::vector<Point>& pts = *points_;
+    const Point& q = pts[static_cast<std::size_t>(query)];
+    for (std::int32_t j = 0; j < static_cast<std::int32_t>(pts.size()); ++j) {
+      if (j != query && within_radius(q, pts[static_cast<std::size_t>(j)], radius)) visit(j);
+    }
+  }
+
+ private:
+  const std::vector<Point>* points_ = nullptr;
+};
+
+/// Uniform grid with square cells (counting-sort layout, no per-cell allocation).
+/// Expected O(1 + neighbours) per query at radius ~ cell size for points spread over the image.
+template <typename Scalar>
+class GridNeighborSearch {
+ public:
+  using Point = Eigen::Matrix<Scalar, 2, 1>;
+
+  /// Cell side as a multiple of the typical radius R. 1 means a query at R scans at most 3 x 3 cells.
+  Scalar cell_size_factor = Scalar(1);
+  /// Upper bound on the number of cells, so that a tiny radius cannot allocate a huge grid.
+  std::int64_t max_cells = 1 << 20;
+
+  void build(const std::vector<Point>& points, Scalar typical_radius) {
+    points_ = &points;
+    const std::size_t n = points.size();
+    if (n == 0) {
+      cols_ = rows_ = 0;
+      return;
+    }
+    min_ = points[0];
+    Point max = points[0];
+    for (const Point& p : points) {
+      min_ = min_.cwiseMin(p);
+      max = max.cwiseMax(p);
+    }
+    const Scalar extent = std::max(max.x() - min_.x(), max.y() - min_.y());
+    cell_ = typical_radius * cell_size_factor;
+    if (!(cell_ > 0) || !std::isfinite(cell_)) cell_ = extent > 0 ? extent : Scalar(1);
+    // Enlarge cells until the grid respects max_cells.
+    for (;;) {
+      cols_ = static_cast<std::int64_t>((max.x() - min_.x()) / cell_) + 1;
+      rows_ = static_cast<std::int64_t>((max.y() - min_.y()) / cell_) + 1;
+      if (cols_ * rows_ <= max_cells) break;
+      cell_ *= 2;
+    }
+    inv_cell_ = Scalar(1) / cell_;
+    cell_of_.resize(n);
+    cell_start_.assign(static_cast<std::size_t>(cols_ * rows_) + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::int64_t c = clamp_col(cell_coord(points[i].x() - min_.x()));
+      const std::int64_t r = clamp_row(cell_coord(points[i].y() - min_.y()));
+      cell_of_[i] = static_cast<std::int32_t>(r * cols_ + c);
+      ++cell_start_[static_cast<std::size_t>(cell_of_[i]) + 1];
+    }
+    for (std::size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
+    members_.resize(n);
+    fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) members_[static_cast<std::size_t>(fill_[cell_of_[i]]++)] = static_cast<std::int32_t>(i);
+  }
+
+  template <typename Visit>
+  void for_each_within(std::int32_t query, Scalar radius, Visit&& visit) const {
+    if (cols_ == 0) return;
+    const std::vector<Point>& pts = *points_;
+    const Point& q = pts[static_cast<std::size_t>(query)];
+    // Pad the scanned range by a relative epsilon: within_radius may accept a point a few ulps
+    // beyond `radius` after rounding, and such a point must not be skipped.
+    const Scalar reach = radius * (Scalar(1) + Scalar(64) * std::numeric_limits<Scalar>::epsilon());
+    const std::int64_t c0 = clamp_col(cell_coord(q.x() - reach - min_.x()));
+    const std::int64_t c1 = clamp_col(cell_coord(q.x() + reach - min_.x()));
+    const std::int64_t r0 = clamp_row(cell_coord(q.y() - reach - min_.y()));
+    const std::int64_t r1 = clamp_row(cell_coord(q.y() + reach - min_.y()));
+    for (std::int64_t r = r0; r <= r1; ++r) {
+      const std::size_t row_base = static_cast<std::size_t>(r * cols_);
+      const std::int32_t begin = cell_start_[row_base + static_cast<std::size_t>(c0)];
+      const std::int32_t end = cell_start_[row_base + static_cast<std::size_t>(c1) + 1];
+      // Cells of a row are contiguous in members_, so one run covers columns c0..c1.
+      for (std::int32_t k = begin; k < end; ++k) {
+        const std::int32_t j = members_[static_cast<std::size_t>(k)];
+        if (j != query && within_radius(q, pts[static_cast<std::size_t>(j)], radius)) visit(j);
+      }
+    }
+  }
+
+ private:
+  std::int64_t cell_coord(Scalar offset) const {
+    const Scalar c = std::floor(offset * inv_cell_);
+    // Saturate before converting so a huge radius cannot overflow the integer.
+    if (c < Scalar(-1)) return -1;
+    if (c > Scalar(std::numeric_limits<std::int32_t>::max())) return std::numeric_limits<std::int32_t>::max();
+    return static_cast<std::int64_t>(c);
+  }
+  std::int64_t clamp_col(std::int64_t c) const { return std::min<std::int64_t>(std::max<std::int64_t>(c, 0), cols_ - 1); }
+  std::int64_t clamp_row(std::int64_t r) const { return std::min<std::int64_t>(std::max<std::int64_t>(r, 0), rows_ - 1); }
+
+  const std::vector<Point>* points_ = nullptr;
+  Point min_ = Point::Zero();
+  Scalar cell_ = Scalar(1);
+  Scalar inv_cell_ = Scalar(1);
+  std::int64_t cols_ = 0;
+  std::int64_t rows_ = 0;
+  std::vector<std::int32_t> cell_of_;
+  std::vector<std::int32_t> cell_start_;
+  std::vector<std::int32_t> members_;
+  std::vector<std::int32_t> fill_;
+};
+
+}  // namespace cge
