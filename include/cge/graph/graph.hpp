@@ -12,11 +12,15 @@
 #include <cstdint>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 namespace cge {
+
+template <typename S, typename NS>
+class GraphBuilder;
 
 /// What a node of a frame graph stands for (ALGORITHMS.md section 3).
 enum class NodeKind : std::uint8_t {
@@ -86,14 +90,17 @@ class Graph {
       }
       if (e.u > e.v) std::swap(e.u, e.v);
     }
-    // Sort an index permutation so edge_rounds can follow the edges.
-    std::vector<std::size_t> order(edges.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-      return edges[a].u != edges[b].u ? edges[a].u < edges[b].u
-             : edges[a].v != edges[b].v ? edges[a].v < edges[b].v
-                                        : a < b;
-    });
+    // Sort (u, v) keys with the original position as tie-break, so edge_rounds can follow.
+    struct Keyed {
+      std::uint64_t key;
+      std::size_t index;
+    };
+    std::vector<Keyed> order(edges.size());
+    for (std::size_t i = 0; i < edges.size(); ++i) {
+      order[i] = Keyed{(static_cast<std::uint64_t>(edges[i].u) << 32) | static_cast<std::uint32_t>(edges[i].v), i};
+    }
+    std::sort(order.begin(), order.end(),
+              [](const Keyed& a, const Keyed& b) { return a.key != b.key ? a.key < b.key : a.index < b.index; });
     Graph g;
     g.num_nodes_ = num_nodes;
     g.weighted_ = weighted;
@@ -102,15 +109,13 @@ class Graph {
     g.edges_.reserve(edges.size());
     if (!edge_rounds.empty()) g.edge_rounds_.reserve(edges.size());
     for (std::size_t k = 0; k < order.size(); ++k) {
-      const Edge<Scalar>& e = edges[order[k]];
-      if (k > 0) {
-        const Edge<Scalar>& prev = edges[order[k - 1]];
-        if (prev.u == e.u && prev.v == e.v) {
-          throw std::invalid_argument(describe(order[k], e) + " repeats " + describe(order[k - 1], prev));
-        }
+      const Edge<Scalar>& e = edges[order[k].index];
+      if (k > 0 && order[k].key == order[k - 1].key) {
+        throw std::invalid_argument(describe(order[k].index, e) + " repeats " +
+                                    describe(order[k - 1].index, edges[order[k - 1].index]));
       }
       g.edges_.push_back(e);
-      if (!edge_rounds.empty()) g.edge_rounds_.push_back(edge_rounds[order[k]]);
+      if (!edge_rounds.empty()) g.edge_rounds_.push_back(edge_rounds[order[k].index]);
     }
     g.build_csr();
     return g;
@@ -145,6 +150,10 @@ class Graph {
   friend bool operator!=(const Graph& a, const Graph& b) { return !(a == b); }
 
  private:
+  // GraphBuilder emits canonical CSR directly (no edge sort); it is the only unchecked producer.
+  template <typename S, typename NS>
+  friend class GraphBuilder;
+
   static std::string describe(std::size_t index, const Edge<Scalar>& e) {
     std::ostringstream s;
     s << "edge #" << index << " (" << e.u << ", " << e.v << ")";

@@ -5,8 +5,9 @@
 //   void build(const std::vector<Eigen::Matrix<Scalar, 2, 1>>& points, Scalar typical_radius);
 //       index the points (called once per graph; typical_radius is the base radius R in pixels)
 //   template <class Visit> void for_each_within(std::int32_t query, Scalar radius, Visit&& visit) const;
-//       call visit(j) exactly once for every indexed point j != query with
-//       within_radius(points[query], points[j], radius), in any order.
+//       call visit(j, d2) exactly once for every indexed point j != query with
+//       within_radius(points[query], points[j], radius), in any order, where
+//       d2 = squared_distance(points[query], points[j]).
 // Every policy must decide membership with cge::within_radius and nothing else: that is what makes
 // the graphs of all policies identical, bit for bit. A policy may only skip points it has proved
 // to lie outside the radius.
@@ -51,8 +52,10 @@ class BruteForceNeighborSearch {
   void for_each_within(std::int32_t query, Scalar radius, Visit&& visit) const {
     const std::vector<Point>& pts = *points_;
     const Point& q = pts[static_cast<std::size_t>(query)];
+    const Scalar rr = radius * radius;
     for (std::int32_t j = 0; j < static_cast<std::int32_t>(pts.size()); ++j) {
-      if (j != query && within_radius(q, pts[static_cast<std::size_t>(j)], radius)) visit(j);
+      const Scalar d2 = squared_distance(q, pts[static_cast<std::size_t>(j)]);
+      if (d2 <= rr && j != query) visit(j, d2);
     }
   }
 
@@ -60,7 +63,8 @@ class BruteForceNeighborSearch {
   const std::vector<Point>* points_ = nullptr;
 };
 
-/// Uniform grid with square cells (counting-sort layout, no per-cell allocation).
+/// Uniform grid with square cells (counting-sort layout, no per-cell allocation). Coordinates are
+/// copied in cell order so that a query scans contiguous memory.
 /// Expected O(1 + neighbours) per query at radius ~ cell size for points spread over the image.
 template <typename Scalar>
 class GridNeighborSearch {
@@ -70,15 +74,12 @@ class GridNeighborSearch {
   /// Cell side as a multiple of the typical radius R. 1 means a query at R scans at most 3 x 3 cells.
   Scalar cell_size_factor = Scalar(1);
   /// Upper bound on the number of cells, so that a tiny radius cannot allocate a huge grid.
-  std::int64_t max_cells = 1 << 20;
+  std::int64_t max_cells = std::int64_t(1) << 20;
 
   void build(const std::vector<Point>& points, Scalar typical_radius) {
-    points_ = &points;
     const std::size_t n = points.size();
-    if (n == 0) {
-      cols_ = rows_ = 0;
-      return;
-    }
+    cols_ = rows_ = 0;
+    if (n == 0) return;
     min_ = points[0];
     Point max = points[0];
     for (const Point& p : points) {
@@ -88,62 +89,76 @@ class GridNeighborSearch {
     const Scalar extent = std::max(max.x() - min_.x(), max.y() - min_.y());
     cell_ = typical_radius * cell_size_factor;
     if (!(cell_ > 0) || !std::isfinite(cell_)) cell_ = extent > 0 ? extent : Scalar(1);
-    // Enlarge cells until the grid respects max_cells.
-    for (;;) {
+    for (;;) {  // enlarge cells until the grid respects max_cells
       cols_ = static_cast<std::int64_t>((max.x() - min_.x()) / cell_) + 1;
       rows_ = static_cast<std::int64_t>((max.y() - min_.y()) / cell_) + 1;
       if (cols_ * rows_ <= max_cells) break;
       cell_ *= 2;
     }
     inv_cell_ = Scalar(1) / cell_;
-    cell_of_.resize(n);
+    std::vector<std::int32_t> cell_of(n);
     cell_start_.assign(static_cast<std::size_t>(cols_ * rows_) + 1, 0);
     for (std::size_t i = 0; i < n; ++i) {
-      const std::int64_t c = clamp_col(cell_coord(points[i].x() - min_.x()));
-      const std::int64_t r = clamp_row(cell_coord(points[i].y() - min_.y()));
-      cell_of_[i] = static_cast<std::int32_t>(r * cols_ + c);
-      ++cell_start_[static_cast<std::size_t>(cell_of_[i]) + 1];
+      const std::int64_t c = cell_index(points[i].x() - min_.x(), cols_);
+      const std::int64_t r = cell_index(points[i].y() - min_.y(), rows_);
+      cell_of[i] = static_cast<std::int32_t>(r * cols_ + c);
+      ++cell_start_[static_cast<std::size_t>(cell_of[i]) + 1];
     }
     for (std::size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
     members_.resize(n);
-    fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) members_[static_cast<std::size_t>(fill_[cell_of_[i]]++)] = static_cast<std::int32_t>(i);
+    xs_.resize(n);
+    ys_.resize(n);
+    std::vector<std::int32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t slot = static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++);
+      members_[slot] = static_cast<std::int32_t>(i);
+      xs_[slot] = points[i].x();
+      ys_[slot] = points[i].y();
+    }
+    points_ = &points;
   }
 
   template <typename Visit>
   void for_each_within(std::int32_t query, Scalar radius, Visit&& visit) const {
     if (cols_ == 0) return;
-    const std::vector<Point>& pts = *points_;
-    const Point& q = pts[static_cast<std::size_t>(query)];
+    const Point& q = (*points_)[static_cast<std::size_t>(query)];
     // Pad the scanned range by a relative epsilon: within_radius may accept a point a few ulps
     // beyond `radius` after rounding, and such a point must not be skipped.
     const Scalar reach = radius * (Scalar(1) + Scalar(64) * std::numeric_limits<Scalar>::epsilon());
-    const std::int64_t c0 = clamp_col(cell_coord(q.x() - reach - min_.x()));
-    const std::int64_t c1 = clamp_col(cell_coord(q.x() + reach - min_.x()));
-    const std::int64_t r0 = clamp_row(cell_coord(q.y() - reach - min_.y()));
-    const std::int64_t r1 = clamp_row(cell_coord(q.y() + reach - min_.y()));
+    const std::int64_t c0 = cell_index(q.x() - reach - min_.x(), cols_);
+    const std::int64_t c1 = cell_index(q.x() + reach - min_.x(), cols_);
+    const std::int64_t r0 = cell_index(q.y() - reach - min_.y(), rows_);
+    const std::int64_t r1 = cell_index(q.y() + reach - min_.y(), rows_);
+    const Scalar rr = radius * radius;
+    const Scalar qx = q.x();
+    const Scalar qy = q.y();
     for (std::int64_t r = r0; r <= r1; ++r) {
       const std::size_t row_base = static_cast<std::size_t>(r * cols_);
+      // Cells of a row are contiguous, so one run covers columns c0..c1.
       const std::int32_t begin = cell_start_[row_base + static_cast<std::size_t>(c0)];
       const std::int32_t end = cell_start_[row_base + static_cast<std::size_t>(c1) + 1];
-      // Cells of a row are contiguous in members_, so one run covers columns c0..c1.
       for (std::int32_t k = begin; k < end; ++k) {
-        const std::int32_t j = members_[static_cast<std::size_t>(k)];
-        if (j != query && within_radius(q, pts[static_cast<std::size_t>(j)], radius)) visit(j);
+        // Same arithmetic as squared_distance(q, p_j), so the result is bit-identical.
+        const Scalar dx = qx - xs_[static_cast<std::size_t>(k)];
+        const Scalar dy = qy - ys_[static_cast<std::size_t>(k)];
+        const Scalar d2 = dx * dx + dy * dy;
+        if (d2 <= rr) {
+          const std::int32_t j = members_[static_cast<std::size_t>(k)];
+          if (j != query) visit(j, d2);
+        }
       }
     }
   }
 
  private:
-  std::int64_t cell_coord(Scalar offset) const {
-    const Scalar c = std::floor(offset * inv_cell_);
-    // Saturate before converting so a huge radius cannot overflow the integer.
-    if (c < Scalar(-1)) return -1;
-    if (c > Scalar(std::numeric_limits<std::int32_t>::max())) return std::numeric_limits<std::int32_t>::max();
+  /// Cell coordinate of an offset from the grid's minimum, clamped to [0, count - 1]. Truncation
+  /// equals floor for non-negative values, and every negative value clamps to 0 either way.
+  std::int64_t cell_index(Scalar offset, std::int64_t count) const {
+    const Scalar c = offset * inv_cell_;
+    if (!(c >= Scalar(0))) return 0;
+    if (c >= static_cast<Scalar>(count)) return count - 1;
     return static_cast<std::int64_t>(c);
   }
-  std::int64_t clamp_col(std::int64_t c) const { return std::min<std::int64_t>(std::max<std::int64_t>(c, 0), cols_ - 1); }
-  std::int64_t clamp_row(std::int64_t r) const { return std::min<std::int64_t>(std::max<std::int64_t>(r, 0), rows_ - 1); }
 
   const std::vector<Point>* points_ = nullptr;
   Point min_ = Point::Zero();
@@ -151,10 +166,9 @@ class GridNeighborSearch {
   Scalar inv_cell_ = Scalar(1);
   std::int64_t cols_ = 0;
   std::int64_t rows_ = 0;
-  std::vector<std::int32_t> cell_of_;
   std::vector<std::int32_t> cell_start_;
   std::vector<std::int32_t> members_;
-  std::vector<std::int32_t> fill_;
+  std::vector<Scalar> xs_, ys_;
 };
 
 }  // namespace cge
