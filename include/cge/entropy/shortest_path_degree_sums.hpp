@@ -10,6 +10,8 @@
 // and Delta(s, k) sums, over the nodes u at distance k, S[u] (TieMode::all), S[u] / N[u]
 // (TieMode::mean) or M[u] (TieMode::min). All three depend only on the graph, never on node
 // numbering. N and S are kept in double: path counts grow exponentially on tie-rich graphs.
+// The sweep runs 64 sources at once, one bit per source (see BitParallelDegreeSums): the same
+// O(|V| |E|) arithmetic, but the BFS bookkeeping costs one word operation per 64 sources.
 
 #include <algorithm>
 #include <cmath>
@@ -49,92 +51,203 @@ struct DegreeSumTable {
 
 namespace detail {
 
-/// Scratch arrays of one BFS, reused across sources.
-struct BfsScratch {
-  std::vector<std::int32_t> dist;
+/// Index of the lowest set bit of a non-zero word.
+inline int lowest_bit(std::uint64_t word) {
+#if defined(__GNUC__) || defined(__clang__)
+  return __builtin_ctzll(word);
+#else
+  int i = 0;
+  while (!(word & 1u)) {
+    word >>= 1;
+    ++i;
+  }
+  return i;
+#endif
+}
+
+/// Groups the nodes into blocks of up to 64 sources that lie close together in the graph (a BFS
+/// ball grown from the lowest unassigned node), so that the blocks' BFS frontiers overlap and the
+/// bit-parallel sweep wastes few words. Deterministic; the result values do not depend on it.
+template <typename Scalar>
+std::vector<std::int32_t> local_source_order(const Graph<Scalar>& g) {
+  const std::int32_t n = g.num_nodes();
+  std::vector<std::int32_t> order;
+  order.reserve(static_cast<std::size_t>(n));
+  std::vector<std::uint8_t> assigned(static_cast<std::size_t>(n), 0);
+  std::vector<std::int32_t> seen_at(static_cast<std::size_t>(n), -1);
   std::vector<std::int32_t> queue;
-  std::vector<double> count;  // N
-  std::vector<double> sum;    // S (all, mean) or M (min)
-  std::vector<double> degree;
-  explicit BfsScratch(std::int32_t n)
-      : dist(static_cast<std::size_t>(n), -1), queue(static_cast<std::size_t>(n)), count(static_cast<std::size_t>(n)),
-        sum(static_cast<std::size_t>(n)), degree(static_cast<std::size_t>(n)) {}
-};
-
-/// One BFS from s; appends Delta(s, 1..ecc(s)) to `layers` and returns how many nodes it reached.
-template <TieMode Mode, typename Scalar>
-std::int32_t degree_sums_from(const Graph<Scalar>& g, std::int32_t s, BfsScratch& w, std::vector<double>& layers) {
-  const std::int32_t* offsets = g.csr_offsets().data();
-  const std::int32_t* adjacency = g.csr_adjacency().data();
-  std::int32_t* dist = w.dist.data();
-  std::int32_t* queue = w.queue.data();
-  double* count = w.count.data();
-  double* sum = w.sum.data();
-  const double* degree = w.degree.data();
-
-  layers.clear();
-  dist[s] = 0;
-  count[s] = 1.0;
-  sum[s] = 0.0;
-  queue[0] = s;
-  std::int32_t head = 0;
-  std::int32_t tail = 1;
-  std::int32_t layer = 0;
-  double layer_sum = 0.0;
-  while (head < tail) {
-    const std::int32_t u = queue[head++];
-    const std::int32_t du = dist[u];
-    if (du != layer) {  // BFS order: layers arrive one after another
-      if (layer > 0) layers.push_back(layer_sum);
-      layer = du;
-      layer_sum = 0.0;
-    }
-    const double nu = count[u];
-    const double su = sum[u];
-    if (Mode == TieMode::all) layer_sum += su;
-    if (Mode == TieMode::mean) layer_sum += su / nu;
-    if (Mode == TieMode::min) layer_sum += su;
-    const double deg_u = degree[u];
-    const std::int32_t next = du + 1;
-    for (std::int32_t e = offsets[u], end = offsets[u + 1]; e < end; ++e) {
-      const std::int32_t v = adjacency[e];
-      std::int32_t dv = dist[v];
-      if (dv < 0) {
-        dist[v] = dv = next;
-        queue[tail++] = v;
-        count[v] = 0.0;
-        sum[v] = Mode == TieMode::min ? std::numeric_limits<double>::infinity() : 0.0;
+  std::int32_t next_seed = 0;
+  for (std::int32_t block = 0; static_cast<std::int32_t>(order.size()) < n; ++block) {
+    while (assigned[static_cast<std::size_t>(next_seed)]) ++next_seed;
+    std::size_t taken = 0;
+    queue.assign(1, next_seed);
+    seen_at[static_cast<std::size_t>(next_seed)] = block;
+    for (std::size_t head = 0; head < queue.size() && taken < 64; ++head) {
+      const std::int32_t u = queue[head];
+      if (!assigned[static_cast<std::size_t>(u)]) {
+        assigned[static_cast<std::size_t>(u)] = 1;
+        order.push_back(u);
+        ++taken;
       }
-      if (dv == next) {
-        const double diff = std::fabs(deg_u - degree[v]);
-        if (Mode == TieMode::min) {
-          sum[v] = std::min(sum[v], su + diff);
-        } else {
-          count[v] += nu;
-          sum[v] += su + nu * diff;
+      for (const std::int32_t v : g.neighbors(u)) {
+        if (seen_at[static_cast<std::size_t>(v)] != block) {
+          seen_at[static_cast<std::size_t>(v)] = block;
+          queue.push_back(v);
         }
       }
     }
   }
-  if (layer > 0) layers.push_back(layer_sum);
-  for (std::int32_t i = 0; i < tail; ++i) dist[queue[i]] = -1;
-  return tail;
+  return order;
 }
+
+/// Delta rows of up to 64 sources at once. Level-synchronous BFS with one bit per source:
+///   reach_k[u] = (OR over neighbours p of reach_{k-1}[p]) & ~visited[u]
+/// and, for each arc p -> u, the sources for which p is a shortest-path predecessor of u are
+/// exactly the bits of reach_{k-1}[p] & reach_k[u]; only those (source, arc) pairs do arithmetic.
+/// For a fixed source each node accumulates over its neighbours in ascending order, so the
+/// floating-point result is the same whatever block the source is in.
+template <TieMode Mode, typename Scalar>
+class BitParallelDegreeSums {
+ public:
+  explicit BitParallelDegreeSums(const Graph<Scalar>& g)
+      : g_(g),
+        n_(g.num_nodes()),
+        previous_(static_cast<std::size_t>(n_), 0),
+        current_(static_cast<std::size_t>(n_), 0),
+        visited_(static_cast<std::size_t>(n_), 0),
+        values_(static_cast<std::size_t>(n_) * 64),
+        degree_(static_cast<std::size_t>(n_)),
+        touched_(static_cast<std::size_t>(n_), 0) {
+    for (std::int32_t v = 0; v < n_; ++v) degree_[static_cast<std::size_t>(v)] = g.degree(v);
+    frontier_.reserve(static_cast<std::size_t>(n_));
+    next_frontier_.reserve(static_cast<std::size_t>(n_));
+  }
+
+  /// Runs the sources (at most 64); rows[i] receives Delta(sources[i], 1..ecc). Returns the number
+  /// of (source, node) pairs reached.
+  std::int64_t run(const std::int32_t* sources, int lanes, std::vector<std::vector<double>>& rows) {
+    const std::int32_t* offsets = g_.csr_offsets().data();
+    const std::int32_t* adjacency = g_.csr_adjacency().data();
+    // previous_ and current_ are all zero between runs; visited_ is reset from the reached nodes.
+    std::fill(visited_.begin(), visited_.end(), 0);
+    frontier_.clear();
+    for (int i = 0; i < lanes; ++i) {
+      const std::size_t s = static_cast<std::size_t>(sources[i]);
+      const std::uint64_t bit = std::uint64_t(1) << i;
+      if (!previous_[s]) frontier_.push_back(sources[i]);
+      previous_[s] |= bit;
+      visited_[s] |= bit;
+      values_[s * 64 + static_cast<std::size_t>(i)] = Values{1.0, 0.0};
+      rows[static_cast<std::size_t>(i)].clear();
+    }
+    std::sort(frontier_.begin(), frontier_.end());
+    std::int64_t reached = lanes;
+    double layer[64];
+    while (!frontier_.empty()) {
+      // Push the frontier's bits to its neighbours; the touched nodes, masked by what each lane
+      // has already visited, form the next frontier.
+      next_frontier_.clear();
+      for (const std::int32_t p : frontier_) {
+        const std::uint64_t word = previous_[static_cast<std::size_t>(p)];
+        for (std::int32_t e = offsets[p], end = offsets[p + 1]; e < end; ++e) {
+          const std::size_t u = static_cast<std::size_t>(adjacency[e]);
+          current_[u] |= word;
+          if (!touched_[u]) {
+            touched_[u] = 1;
+            next_frontier_.push_back(adjacency[e]);
+          }
+        }
+      }
+      std::size_t kept = 0;
+      for (const std::int32_t u : next_frontier_) {
+        const std::size_t k = static_cast<std::size_t>(u);
+        touched_[k] = 0;
+        current_[k] &= ~visited_[k];
+        if (current_[k]) next_frontier_[kept++] = u;
+      }
+      next_frontier_.resize(kept);
+      if (next_frontier_.empty()) break;
+      // Ascending node order: fixes the summation order of the layer sums.
+      std::sort(next_frontier_.begin(), next_frontier_.end());
+
+      std::uint64_t active_lanes = 0;
+      for (int i = 0; i < lanes; ++i) layer[i] = 0.0;
+      for (const std::int32_t u : next_frontier_) {
+        const std::uint64_t here = current_[static_cast<std::size_t>(u)];
+        visited_[static_cast<std::size_t>(u)] |= here;
+        active_lanes |= here;
+        Values* at_u = &values_[static_cast<std::size_t>(u) * 64];
+        for (std::uint64_t m = here; m; m &= m - 1) {
+          at_u[lowest_bit(m)] = Values{0.0, Mode == TieMode::min ? std::numeric_limits<double>::infinity() : 0.0};
+          ++reached;
+        }
+        const double deg_u = degree_[static_cast<std::size_t>(u)];
+        for (std::int32_t e = offsets[u], end = offsets[u + 1]; e < end; ++e) {
+          const std::int32_t p = adjacency[e];
+          std::uint64_t pred = previous_[static_cast<std::size_t>(p)] & here;
+          if (!pred) continue;
+          const double diff = std::fabs(degree_[static_cast<std::size_t>(p)] - deg_u);
+          const Values* at_p = &values_[static_cast<std::size_t>(p) * 64];
+          for (; pred; pred &= pred - 1) {
+            const int i = lowest_bit(pred);
+            if (Mode == TieMode::min) {
+              at_u[i].sum = std::min(at_u[i].sum, at_p[i].sum + diff);
+            } else {
+              at_u[i].count += at_p[i].count;
+              at_u[i].sum += at_p[i].sum + at_p[i].count * diff;
+            }
+          }
+        }
+        for (std::uint64_t m = here; m; m &= m - 1) {
+          const int i = lowest_bit(m);
+          layer[i] += Mode == TieMode::mean ? at_u[i].sum / at_u[i].count : at_u[i].sum;
+        }
+      }
+      for (std::uint64_t m = active_lanes; m; m &= m - 1) {
+        const int i = lowest_bit(m);
+        rows[static_cast<std::size_t>(i)].push_back(layer[i]);
+      }
+      for (const std::int32_t p : frontier_) previous_[static_cast<std::size_t>(p)] = 0;
+      previous_.swap(current_);
+      frontier_.swap(next_frontier_);
+    }
+    for (const std::int32_t p : frontier_) previous_[static_cast<std::size_t>(p)] = 0;
+    return reached;
+  }
+
+ private:
+  struct Values {
+    double count;  // N: number of shortest paths (unused by TieMode::min)
+    double sum;    // S: sum of their degree sums, or M: the smallest degree sum
+  };
+  const Graph<Scalar>& g_;
+  std::int32_t n_;
+  std::vector<std::uint64_t> previous_, current_, visited_;  // one bit per lane
+  std::vector<Values> values_;                               // [node][lane]
+  std::vector<double> degree_;
+  std::vector<std::uint8_t> touched_;
+  std::vector<std::int32_t> frontier_, next_frontier_;
+};
 
 template <TieMode Mode, typename Scalar>
 void fill_table(const Graph<Scalar>& g, DegreeSumTable& table) {
   const std::int32_t n = g.num_nodes();
-  BfsScratch scratch(n);
-  for (std::int32_t v = 0; v < n; ++v) scratch.degree[static_cast<std::size_t>(v)] = g.degree(v);
-  std::vector<double> layers;
-  layers.reserve(static_cast<std::size_t>(n));
+  const std::vector<std::int32_t> order = local_source_order(g);
+  BitParallelDegreeSums<Mode, Scalar> sweep(g);
+  std::vector<std::vector<double>> rows_by_source(static_cast<std::size_t>(n));
+  std::vector<std::vector<double>> block_rows(64);
+  for (std::size_t first = 0; first < order.size(); first += 64) {
+    const int lanes = static_cast<int>(std::min<std::size_t>(64, order.size() - first));
+    const std::int64_t reached = sweep.run(order.data() + first, lanes, block_rows);
+    if (reached < static_cast<std::int64_t>(lanes) * n) table.connected = false;
+    for (int i = 0; i < lanes; ++i) rows_by_source[static_cast<std::size_t>(order[first + static_cast<std::size_t>(i)])].swap(block_rows[static_cast<std::size_t>(i)]);
+  }
   table.row_offsets.assign(static_cast<std::size_t>(n) + 1, 0);
   for (std::int32_t s = 0; s < n; ++s) {
-    const std::int32_t reached = degree_sums_from<Mode>(g, s, scratch, layers);
-    if (reached < n) table.connected = false;
-    table.values.insert(table.values.end(), layers.begin(), layers.end());
+    const std::vector<double>& row = rows_by_source[static_cast<std::size_t>(s)];
+    table.values.insert(table.values.end(), row.begin(), row.end());
     table.row_offsets[static_cast<std::size_t>(s) + 1] = static_cast<std::int64_t>(table.values.size());
-    table.diameter = std::max(table.diameter, static_cast<std::int32_t>(layers.size()));
+    table.diameter = std::max(table.diameter, static_cast<std::int32_t>(row.size()));
   }
 }
 
