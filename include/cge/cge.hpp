@@ -17,3 +17,4 @@
 #include "cge/graph/graph.hpp"
 #include "cge/graph/graph_builder.hpp"
 #include "cge/graph/neighbor_search.hpp"
+#include "cge/io/graph_text.hpp"

@@ -1,0 +1,239 @@
+// cge_entropy: the degree-degree association entropy, information index and edge entropy of one
+// graph, read from an edge list or built from a point list. See docs/CLI.md.
+//
+// Output: one "name value" line per quantity on standard output (values with 15 significant
+// digits), diagnostics on standard error. Exit codes: 0 success; 1 a computation that cannot be
+// carried out (path multiplicities overflowing double); 2 bad usage or bad input.
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+
+#include <CLI/CLI.hpp>
+
+#include "cge/entropy/coefficients.hpp"
+#include "cge/entropy/degree_degree_entropy.hpp"
+#include "cge/entropy/exponent_scaling.hpp"
+#include "cge/entropy/shannon_edge_entropy.hpp"
+#include "cge/entropy/shortest_path_degree_sums.hpp"
+#include "cge/graph/graph_builder.hpp"
+#include "cge/io/graph_text.hpp"
+
+#ifndef CGE_VERSION_STRING
+#define CGE_VERSION_STRING "unknown"
+#endif
+
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitComputation = 1;
+constexpr int kExitUsage = 2;
+constexpr const char* kProgram = "cge_entropy";
+
+/// A bad input or flag value, reported on stderr with exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Options {
+  std::string file = "-";
+  bool points = false;
+  bool one_based = false;
+  double alpha = 0.5;
+  double lambda = 1.0;
+  cge::CoefficientKind coeff = cge::CoefficientKind::exp;
+  cge::TieMode ties = cge::TieMode::all;
+  cge::ScalingKind scaling = cge::ScalingKind::raw;
+  double width_px = 640.0;
+  double height_px = 480.0;
+  int dense_threshold = cge::GraphBuilderSettings<double>().dense_patch_threshold;
+  double radius_fraction = cge::GraphBuilderSettings<double>().radius_fraction_of_diagonal;
+};
+
+std::string number(double value) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.15g", value);
+  return buf;
+}
+
+void require_positive(const char* flag, double value) {
+  if (!(std::isfinite(value) && value > 0)) {
+    throw UsageError(std::string(flag) + " must be a finite positive number, got " + number(value));
+  }
+}
+
+void print_value(const char* name, double value) { std::printf("%s %.15g\n", name, value); }
+
+cge::Graph<double> read_points_graph(std::istream& in, const std::string& source, const Options& opt) {
+  const cge::io::PointList list = cge::io::read_point_list(in, source);
+  cge::ImageRegion<double> image;
+  image.width_px = opt.width_px;
+  image.height_px = opt.height_px;
+  // Check the region here, where the line of every point is known.
+  for (std::size_t i = 0; i < list.points.size(); ++i) {
+    if (!image.contains(list.points[i])) {
+      throw cge::io::ParseError(source, list.point_lines[i],
+                                "point lies outside the " + number(opt.width_px) + " x " + number(opt.height_px) +
+                                    " image (see --width, --height)");
+    }
+  }
+  for (std::size_t i = 0; i < list.instances.size(); ++i) {
+    if (!image.contains(list.instances[i].centre_px)) {
+      throw cge::io::ParseError(source, list.instance_lines[i],
+                                "semantic centre lies outside the " + number(opt.width_px) + " x " +
+                                    number(opt.height_px) + " image (see --width, --height)");
+    }
+  }
+  cge::GraphBuilder<double> builder;
+  builder.settings.dense_patch_threshold = opt.dense_threshold;
+  builder.settings.radius_fraction_of_diagonal = opt.radius_fraction;
+  return builder.build(image, list.points, list.instances);
+}
+
+int run(const Options& opt) {
+  require_positive("--alpha", opt.alpha);
+  require_positive("--lambda", opt.lambda);
+  if (opt.points) {
+    require_positive("--width", opt.width_px);
+    require_positive("--height", opt.height_px);
+    require_positive("--radius-fraction", opt.radius_fraction);
+    if (opt.dense_threshold < 0) throw UsageError("--dense-threshold must not be negative");
+  }
+
+  const bool from_stdin = opt.file == "-";
+  const std::string source = from_stdin ? "<stdin>" : opt.file;
+  std::ifstream file;
+  if (!from_stdin) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(opt.file, ec))
+      throw UsageError("cannot read '" + opt.file + "': it is a directory");
+    errno = 0;
+    file.open(opt.file);
+    if (!file) {
+      const int err = errno;
+      throw UsageError("cannot open '" + opt.file + "'" + (err != 0 ? std::string(": ") + std::strerror(err) : ""));
+    }
+  }
+  std::istream& in = from_stdin ? std::cin : file;
+
+  cge::Graph<double> g;
+  if (opt.points) {
+    g = read_points_graph(in, source, opt);
+    if (g.num_nodes() == 0) throw UsageError(source + ": the point list contains no points");
+  } else {
+    cge::io::EdgeListOptions eo;
+    eo.one_based = opt.one_based;
+    g = cge::io::read_edge_list(in, source, eo);
+    if (g.num_nodes() == 0) throw UsageError(source + ": the edge list contains no edges");
+  }
+
+  cge::DegreeDegreeEntropy<double> dde;
+  dde.settings.alpha = opt.alpha;
+  dde.settings.lambda = opt.lambda;
+  dde.settings.ties = opt.ties;
+  dde.coefficients.kind = opt.coeff;
+  dde.scaling.kind = opt.scaling;
+  const auto r = dde.compute(g);
+  if (!r.connected) {
+    std::fprintf(stderr,
+                 "%s: note: the graph is not connected; the diameter is the largest finite distance and "
+                 "unreachable pairs are ignored\n",
+                 kProgram);
+  }
+
+  print_value("vertices", g.num_nodes());
+  print_value("edges", g.num_edges());
+  print_value("connected", r.connected ? 1 : 0);
+  print_value("diameter", r.diameter);
+  print_value("entropy_bits", r.entropy_bits);
+  print_value("max_entropy_bits", r.max_entropy_bits);
+  print_value("information_index", r.information_index);
+  if (g.weighted()) print_value("edge_entropy_bits", cge::ShannonEdgeEntropy<double>().compute(g));
+  std::fflush(stdout);
+  if (std::ferror(stdout)) {
+    std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);
+    return kExitComputation;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  CLI::App app{
+      "Degree-degree association entropy H, information index I = lambda (log2|V| - H) and, for weighted\n"
+      "graphs, the edge-length entropy H_W of one graph (combinatorial graph entropy, cge " CGE_VERSION_STRING
+      ").\nReads an edge list (\"u v\" or \"u v w\" per line) or, with --points, a point list (\"x y "
+      "[feature|semantic]\"\n"
+      "per line, pixels) that is turned into a frame graph. '#' starts a comment. See docs/CLI.md.",
+      kProgram};
+  app.set_version_flag("--version", std::string(kProgram) + " " + CGE_VERSION_STRING);
+  app.add_option("FILE", opt.file, "input file; standard input when absent or \"-\"");
+  CLI::Option* points = app.add_flag("--points", opt.points, "read a point list and build the graph with GraphBuilder");
+  app.add_flag("--one-based", opt.one_based, "edge list vertex ids start at 1")->excludes(points);
+  app.add_option("--alpha", opt.alpha, "base of the functional alpha^E(v), > 0")->capture_default_str();
+  app.add_option("--lambda", opt.lambda, "scale of the information index, > 0")->capture_default_str();
+  std::string coeff = "exp", ties = "all", scaling = "raw";
+  app.add_option("--coeff", coeff, "coefficients c_k: exp = rho e^(1-k), lin = rho - k + 1, const = 1")
+      ->check(CLI::IsMember({"exp", "lin", "const"}))
+      ->capture_default_str();
+  app.add_option("--ties", ties, "how tied shortest paths count in Delta: all (multiplicity), mean, min")
+      ->check(CLI::IsMember({"all", "mean", "min"}))
+      ->capture_default_str();
+  app.add_option("--scaling", scaling, "exponent scaling: raw (the paper) or mean (E / mean E)")
+      ->check(CLI::IsMember({"raw", "mean"}))
+      ->capture_default_str();
+  app.add_option("--width", opt.width_px, "image width in pixels (--points)")->capture_default_str()->needs(points);
+  app.add_option("--height", opt.height_px, "image height in pixels (--points)")->capture_default_str()->needs(points);
+  app.add_option("--dense-threshold", opt.dense_threshold,
+                 "N_th: a patch with more stable features is dense (--points)")
+      ->capture_default_str()
+      ->needs(points);
+  app.add_option("--radius-fraction", opt.radius_fraction,
+                 "base radius R as a fraction of the image diagonal (--points)")
+      ->capture_default_str()
+      ->needs(points);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version exit 0; every real parse error (unknown flag, bad value) exits 2.
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
+    return kExitUsage;
+  }
+  // The validators above admit only these names.
+  opt.coeff = coeff == "lin"     ? cge::CoefficientKind::linear
+              : coeff == "const" ? cge::CoefficientKind::constant
+                                 : cge::CoefficientKind::exp;
+  opt.ties = ties == "mean" ? cge::TieMode::mean : ties == "min" ? cge::TieMode::min : cge::TieMode::all;
+  opt.scaling = scaling == "mean" ? cge::ScalingKind::normalised_mean : cge::ScalingKind::raw;
+
+  try {
+    return run(opt);
+  } catch (const cge::io::ParseError& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  } catch (const std::overflow_error& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitComputation;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitComputation;
+  }
+}
