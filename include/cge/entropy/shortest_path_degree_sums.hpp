@@ -117,7 +117,7 @@ class BitParallelDegreeSums {
         visited_(static_cast<std::size_t>(n_), 0),
         values_(static_cast<std::size_t>(n_) * 64),
         degree_(static_cast<std::size_t>(n_)),
-        touched_(static_cast<std::size_t>(n_), 0) {
+        touched_((static_cast<std::size_t>(n_) + 63) / 64, 0) {
     for (std::int32_t v = 0; v < n_; ++v) degree_[static_cast<std::size_t>(v)] = g.degree(v);
     frontier_.reserve(static_cast<std::size_t>(n_));
     next_frontier_.reserve(static_cast<std::size_t>(n_));
@@ -146,29 +146,27 @@ class BitParallelDegreeSums {
     while (!frontier_.empty()) {
       // Push the frontier's bits to its neighbours; the touched nodes, masked by what each lane
       // has already visited, form the next frontier.
-      next_frontier_.clear();
+      // Push the frontier's bits to its neighbours, marking them in a node bitmap; reading the
+      // bitmap word by word lists the touched nodes in ascending order without a sort, which
+      // fixes the summation order of the layer sums.
       for (const std::int32_t p : frontier_) {
         const std::uint64_t word = previous_[static_cast<std::size_t>(p)];
         for (std::int32_t e = offsets[p], end = offsets[p + 1]; e < end; ++e) {
           const std::size_t u = static_cast<std::size_t>(adjacency[e]);
           current_[u] |= word;
-          if (!touched_[u]) {
-            touched_[u] = 1;
-            next_frontier_.push_back(adjacency[e]);
-          }
+          touched_[u >> 6] |= std::uint64_t(1) << (u & 63);
         }
       }
-      std::size_t kept = 0;
-      for (const std::int32_t u : next_frontier_) {
-        const std::size_t k = static_cast<std::size_t>(u);
-        touched_[k] = 0;
-        current_[k] &= ~visited_[k];
-        if (current_[k]) next_frontier_[kept++] = u;
+      next_frontier_.clear();
+      for (std::size_t w = 0; w < touched_.size(); ++w) {
+        for (std::uint64_t bits = touched_[w]; bits; bits &= bits - 1) {
+          const std::size_t u = w * 64 + static_cast<std::size_t>(lowest_bit(bits));
+          current_[u] &= ~visited_[u];
+          if (current_[u]) next_frontier_.push_back(static_cast<std::int32_t>(u));
+        }
+        touched_[w] = 0;
       }
-      next_frontier_.resize(kept);
       if (next_frontier_.empty()) break;
-      // Ascending node order: fixes the summation order of the layer sums.
-      std::sort(next_frontier_.begin(), next_frontier_.end());
 
       std::uint64_t active_lanes = 0;
       for (int i = 0; i < lanes; ++i) layer[i] = 0.0;
@@ -225,7 +223,7 @@ class BitParallelDegreeSums {
   std::vector<std::uint64_t> previous_, current_, visited_;  // one bit per lane
   std::vector<Values> values_;                               // [node][lane]
   std::vector<double> degree_;
-  std::vector<std::uint8_t> touched_;
+  std::vector<std::uint64_t> touched_;  // bitmap over nodes
   std::vector<std::int32_t> frontier_, next_frontier_;
 };
 
