@@ -50,7 +50,10 @@ SemanticComparison compare_semantics(const std::vector<SemanticInstance<Scalar>>
   }
   for (const auto& kv : xb) nb += double(kv.second) * kv.second;
   out.which = SemanticCase::compared;
-  out.cosine = dot / (std::sqrt(na) * std::sqrt(nb));
+  // One square root of the exact integer product, so that proportional count vectors (the same
+  // layout) give exactly 1. (sqrt(na) * sqrt(nb) can round up: sqrt(5) * sqrt(5) > 5 made identical
+  // layouts score 1 - 2^-52, below a threshold of 1.)
+  out.cosine = dot / std::sqrt(na * nb);
   return out;
 }
 

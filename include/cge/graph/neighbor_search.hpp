@@ -89,10 +89,17 @@ class GridNeighborSearch {
     const Scalar extent = std::max(max.x() - min_.x(), max.y() - min_.y());
     cell_ = typical_radius * cell_size_factor;
     if (!(cell_ > 0) || !std::isfinite(cell_)) cell_ = extent > 0 ? extent : Scalar(1);
+    // Decide in floating point and convert only counts that fit: with a tiny cell the integer
+    // counts (and their product) would overflow. A grid has at least one cell.
+    const Scalar cell_limit = static_cast<Scalar>(std::max<std::int64_t>(max_cells, 1));
     for (;;) {  // enlarge cells until the grid respects max_cells
-      cols_ = static_cast<std::int64_t>((max.x() - min_.x()) / cell_) + 1;
-      rows_ = static_cast<std::int64_t>((max.y() - min_.y()) / cell_) + 1;
-      if (cols_ * rows_ <= max_cells) break;
+      const Scalar cols = std::floor((max.x() - min_.x()) / cell_) + 1;
+      const Scalar rows = std::floor((max.y() - min_.y()) / cell_) + 1;
+      if (cols * rows <= cell_limit) {
+        cols_ = static_cast<std::int64_t>(cols);
+        rows_ = static_cast<std::int64_t>(rows);
+        break;
+      }
       cell_ *= 2;
     }
     inv_cell_ = Scalar(1) / cell_;
