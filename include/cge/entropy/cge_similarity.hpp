@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -102,6 +103,8 @@ class CGESimilarity {
         graph_builder.build(image, current.keypoints, current.dynamic_mask, candidate.dynamic_mask, current.instances);
     const Graph<Scalar> g_cand = graph_builder.build(image, candidate.keypoints, candidate.dynamic_mask,
                                                      current.dynamic_mask, candidate.instances);
+    require_nodes(g_cur, "current");
+    require_nodes(g_cand, "candidate");
     return combine(entropies(g_cur), entropies(g_cand), compare_semantics(current.instances, candidate.instances));
   }
 
@@ -139,6 +142,13 @@ class CGESimilarity {
   }
 
  private:
+  static void require_nodes(const Graph<Scalar>& g, const char* which) {
+    if (g.num_nodes() == 0) {
+      throw std::invalid_argument(std::string("CGESimilarity: the ") + which +
+                                  " frame's graph has no nodes (no stable keypoints and no static semantic instances)");
+    }
+  }
+
   void validate() const {
     if (!(settings.degree_weight >= 0 && settings.degree_weight <= 1)) {
       throw std::invalid_argument("CGESimilaritySettings: degree_weight (mu) must lie in [0, 1]");

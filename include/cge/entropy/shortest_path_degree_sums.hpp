@@ -143,6 +143,7 @@ class BitParallelDegreeSums {
     std::sort(frontier_.begin(), frontier_.end());
     std::int64_t reached = lanes;
     double layer[64];
+    double level_max_count[64];
     while (!frontier_.empty()) {
       // Push the frontier's bits to its neighbours; the touched nodes, masked by what each lane
       // has already visited, form the next frontier.
@@ -169,7 +170,10 @@ class BitParallelDegreeSums {
       if (next_frontier_.empty()) break;
 
       std::uint64_t active_lanes = 0;
-      for (int i = 0; i < lanes; ++i) layer[i] = 0.0;
+      for (int i = 0; i < lanes; ++i) {
+        layer[i] = 0.0;
+        level_max_count[i] = 0.0;
+      }
       for (const std::int32_t u : next_frontier_) {
         const std::uint64_t here = current_[static_cast<std::size_t>(u)];
         visited_[static_cast<std::size_t>(u)] |= here;
@@ -199,8 +203,10 @@ class BitParallelDegreeSums {
         for (std::uint64_t m = here; m; m &= m - 1) {
           const int i = lowest_bit(m);
           layer[i] += Mode == TieMode::mean ? at_u[i].sum / at_u[i].count : at_u[i].sum;
+          if (Mode == TieMode::mean) level_max_count[i] = std::max(level_max_count[i], at_u[i].count);
         }
       }
+      if (Mode == TieMode::mean) rescale_large_counts(active_lanes, level_max_count);
       for (std::uint64_t m = active_lanes; m; m &= m - 1) {
         const int i = lowest_bit(m);
         rows[static_cast<std::size_t>(i)].push_back(layer[i]);
@@ -214,6 +220,29 @@ class BitParallelDegreeSums {
   }
 
  private:
+  /// TieMode::mean needs only the ratio S / N, and every later level is linear in this one, so a
+  /// lane whose path counts grow huge has this whole level scaled by 2^-512: exact (a power of
+  /// two), and N never overflows however tie-rich the graph. TieMode::all needs the true sums and
+  /// reports overflow instead.
+  void rescale_large_counts(std::uint64_t active_lanes, const double* level_max_count) {
+    const double threshold = std::ldexp(1.0, 512);
+    const double factor = std::ldexp(1.0, -512);
+    std::uint64_t large = 0;
+    for (std::uint64_t m = active_lanes; m; m &= m - 1) {
+      const int i = lowest_bit(m);
+      if (level_max_count[i] > threshold) large |= std::uint64_t(1) << i;
+    }
+    if (!large) return;
+    for (const std::int32_t u : next_frontier_) {
+      Values* at_u = &values_[static_cast<std::size_t>(u) * 64];
+      for (std::uint64_t m = current_[static_cast<std::size_t>(u)] & large; m; m &= m - 1) {
+        const int i = lowest_bit(m);
+        at_u[i].count *= factor;
+        at_u[i].sum *= factor;
+      }
+    }
+  }
+
   struct Values {
     double count;  // N: number of shortest paths (unused by TieMode::min)
     double sum;    // S: sum of their degree sums, or M: the smallest degree sum

@@ -118,8 +118,10 @@ class GraphBuilder {
       ++index;
       const Point rel = p - image.origin_px;
       if (!own_empty || !partner_empty) {
-        const int col = std::min(static_cast<int>(std::floor(rel.x() + Scalar(0.5))), mask_w - 1);
-        const int row = std::min(static_cast<int>(std::floor(rel.y() + Scalar(0.5))), mask_h - 1);
+        // Nearest pixel centre; lround rounds the exact value (floor(x + 0.5) would round
+        // 0.49999999999999994 up, as x + 0.5 rounds to 1).
+        const int col = std::min(static_cast<int>(std::lround(rel.x())), mask_w - 1);
+        const int row = std::min(static_cast<int>(std::lround(rel.y())), mask_h - 1);
         if (!own_empty && traits::Mask<OwnMask>::is_set(own_dynamic_mask, col, row)) continue;
         if (!partner_empty && traits::Mask<PartnerMask>::is_set(partner_dynamic_mask, col, row)) continue;
       }
