@@ -1,0 +1,1018 @@
+// Tests of the degree-degree association entropy (ALGORITHMS.md section 4):
+// shortest_path_degree_sums against an independent path-enumeration oracle, DegreeDegreeEntropy
+// against a naive direct formula, the worked values of the spec, invariance under relabelling,
+// numerics on SLAM-sized graphs, and edge cases.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cge/entropy/coefficients.hpp"
+#include "cge/entropy/degree_degree_entropy.hpp"
+#include "cge/entropy/exponent_scaling.hpp"
+#include "cge/entropy/shortest_path_degree_sums.hpp"
+#include "cge/entropy/softmax_entropy.hpp"
+#include "cge/graph/graph.hpp"
+#include "cge/graph/graph_builder.hpp"
+
+namespace {
+
+using cge::TieMode;
+using LD = long double;
+
+// ---------------------------------------------------------------------------------------------
+// Small test graphs
+// ---------------------------------------------------------------------------------------------
+
+struct SmallGraph {
+  std::string name;
+  int n = 0;
+  std::vector<std::pair<int, int>> edges;
+};
+
+cge::Graph<double> to_graph(const SmallGraph& s) {
+  std::vector<cge::Edge<double>> e;
+  for (const auto& [u, v] : s.edges) e.push_back(cge::Edge<double>{u, v, 1.0});
+  return cge::Graph<double>::from_edges(s.n, e, false);
+}
+
+SmallGraph path_graph(int n) {
+  SmallGraph g{"P" + std::to_string(n), n, {}};
+  for (int i = 0; i + 1 < n; ++i) g.edges.push_back({i, i + 1});
+  return g;
+}
+
+SmallGraph cycle_graph(int n) {
+  SmallGraph g = path_graph(n);
+  g.name = "C" + std::to_string(n);
+  g.edges.push_back({n - 1, 0});
+  return g;
+}
+
+SmallGraph complete_graph(int n) {
+  SmallGraph g{"K" + std::to_string(n), n, {}};
+  for (int u = 0; u < n; ++u)
+    for (int v = u + 1; v < n; ++v) g.edges.push_back({u, v});
+  return g;
+}
+
+SmallGraph complete_bipartite(int a, int b) {
+  SmallGraph g{"K" + std::to_string(a) + "," + std::to_string(b), a + b, {}};
+  for (int u = 0; u < a; ++u)
+    for (int v = 0; v < b; ++v) g.edges.push_back({u, a + v});
+  return g;
+}
+
+SmallGraph grid_graph(int rows, int cols) {
+  SmallGraph g{"grid" + std::to_string(rows) + "x" + std::to_string(cols), rows * cols, {}};
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const int v = r * cols + c;
+      if (c + 1 < cols) g.edges.push_back({v, v + 1});
+      if (r + 1 < rows) g.edges.push_back({v, v + cols});
+    }
+  }
+  return g;
+}
+
+SmallGraph hypercube3() {
+  SmallGraph g{"Q3", 8, {}};
+  for (int u = 0; u < 8; ++u)
+    for (int b = 0; b < 3; ++b) {
+      const int v = u ^ (1 << b);
+      if (u < v) g.edges.push_back({u, v});
+    }
+  return g;
+}
+
+SmallGraph petersen() {
+  SmallGraph g{"Petersen", 10, {}};
+  for (int i = 0; i < 5; ++i) {
+    g.edges.push_back({i, (i + 1) % 5});          // outer cycle
+    g.edges.push_back({i, i + 5});                // spokes
+    g.edges.push_back({5 + i, 5 + (i + 2) % 5});  // inner pentagram
+  }
+  return g;
+}
+
+SmallGraph wheel(int rim) {
+  SmallGraph g = cycle_graph(rim);
+  g.name = "W" + std::to_string(rim);
+  g.n = rim + 1;
+  for (int i = 0; i < rim; ++i) g.edges.push_back({rim, i});
+  return g;
+}
+
+SmallGraph disjoint_union(const SmallGraph& a, const SmallGraph& b) {
+  SmallGraph g{a.name + "+" + b.name, a.n + b.n, a.edges};
+  for (const auto& [u, v] : b.edges) g.edges.push_back({u + a.n, v + a.n});
+  return g;
+}
+
+SmallGraph isolated(int n) { return SmallGraph{"I" + std::to_string(n), n, {}}; }
+
+/// Node v becomes perm[v].
+SmallGraph relabel(const SmallGraph& g, const std::vector<int>& perm) {
+  SmallGraph out{g.name + "(relabelled)", g.n, {}};
+  for (const auto& [u, v] : g.edges)
+    out.edges.push_back({perm[static_cast<std::size_t>(u)], perm[static_cast<std::size_t>(v)]});
+  return out;
+}
+
+SmallGraph random_gnp(std::mt19937& rng, int n, double p, const std::string& tag) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  SmallGraph g{tag + "-G(" + std::to_string(n) + "," + std::to_string(p) + ")", n, {}};
+  for (int u = 0; u < n; ++u)
+    for (int v = u + 1; v < n; ++v)
+      if (unit(rng) < p) g.edges.push_back({u, v});
+  return g;
+}
+
+/// Random tree plus extra random edges: connected.
+SmallGraph random_connected(std::mt19937& rng, int n, int extra, const std::string& tag) {
+  SmallGraph g{tag + "-conn(" + std::to_string(n) + "," + std::to_string(extra) + ")", n, {}};
+  std::vector<std::vector<bool>> adj(static_cast<std::size_t>(n),
+                                     std::vector<bool>(static_cast<std::size_t>(n), false));
+  auto add = [&](int u, int v) {
+    if (u == v || adj[static_cast<std::size_t>(u)][static_cast<std::size_t>(v)]) return;
+    adj[static_cast<std::size_t>(u)][static_cast<std::size_t>(v)] =
+        adj[static_cast<std::size_t>(v)][static_cast<std::size_t>(u)] = true;
+    g.edges.push_back({u, v});
+  };
+  for (int v = 1; v < n; ++v) add(v, std::uniform_int_distribution<int>(0, v - 1)(rng));
+  for (int i = 0; i < extra && n > 1; ++i) {
+    add(std::uniform_int_distribution<int>(0, n - 1)(rng), std::uniform_int_distribution<int>(0, n - 1)(rng));
+  }
+  return g;
+}
+
+/// A tie-rich base graph with a few random chords, so degrees differ while ties stay plentiful.
+SmallGraph with_random_chords(std::mt19937& rng, const SmallGraph& base, int chords) {
+  SmallGraph g = base;
+  g.name += "+chords";
+  for (int i = 0; i < chords; ++i) {
+    const int u = std::uniform_int_distribution<int>(0, g.n - 1)(rng);
+    const int v = std::uniform_int_distribution<int>(0, g.n - 1)(rng);
+    if (u == v) continue;
+    const bool exists = std::any_of(g.edges.begin(), g.edges.end(), [&](const std::pair<int, int>& e) {
+      return (e.first == u && e.second == v) || (e.first == v && e.second == u);
+    });
+    if (!exists) g.edges.push_back({u, v});
+  }
+  return g;
+}
+
+std::vector<int> random_permutation(std::mt19937& rng, int n) {
+  std::vector<int> perm(static_cast<std::size_t>(n));
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  return perm;
+}
+
+/// Structured families (tie-rich, regular, disconnected) followed by `random_count` random graphs.
+std::vector<SmallGraph> small_graph_zoo(int random_count) {
+  std::vector<SmallGraph> zoo;
+  for (int n = 1; n <= 12; ++n) zoo.push_back(path_graph(n));
+  for (int n = 3; n <= 12; ++n) zoo.push_back(cycle_graph(n));
+  for (int n = 2; n <= 8; ++n) zoo.push_back(complete_graph(n));
+  for (int a = 1; a <= 6; ++a)
+    for (int b = a; a + b <= 12; ++b) zoo.push_back(complete_bipartite(a, b));
+  for (int r = 2; r <= 4; ++r)
+    for (int c = r; r * c <= 12; ++c) zoo.push_back(grid_graph(r, c));
+  zoo.push_back(hypercube3());
+  zoo.push_back(petersen());
+  for (int rim = 3; rim <= 11; rim += 2) zoo.push_back(wheel(rim));
+  zoo.push_back(isolated(1));
+  zoo.push_back(isolated(5));
+  zoo.push_back(disjoint_union(cycle_graph(4), path_graph(3)));
+  zoo.push_back(disjoint_union(complete_bipartite(2, 3), isolated(1)));
+  zoo.push_back(disjoint_union(grid_graph(2, 3), complete_graph(4)));
+  zoo.push_back(disjoint_union(path_graph(5), disjoint_union(path_graph(2), isolated(2))));
+  zoo.push_back(disjoint_union(isolated(1), complete_bipartite(1, 4)));
+
+  std::mt19937 rng(20240611);
+  for (int i = 0; i < random_count; ++i) {
+    const int n = std::uniform_int_distribution<int>(1, 12)(rng);
+    const std::string tag = "r" + std::to_string(i);
+    switch (i % 5) {
+      case 0:  // sparse, often disconnected
+        zoo.push_back(random_gnp(rng, n, std::uniform_real_distribution<double>(0.05, 0.3)(rng), tag));
+        break;
+      case 1:  // dense
+        zoo.push_back(random_gnp(rng, n, std::uniform_real_distribution<double>(0.3, 0.9)(rng), tag));
+        break;
+      case 2:
+        zoo.push_back(random_connected(rng, n, std::uniform_int_distribution<int>(0, 2 * n)(rng), tag));
+        break;
+      case 3: {  // relabelled tie-rich family with chords
+        const int pick = std::uniform_int_distribution<int>(0, 3)(rng);
+        SmallGraph base = pick == 0   ? grid_graph(3, 4)
+                          : pick == 1 ? complete_bipartite(std::uniform_int_distribution<int>(1, 5)(rng), 6)
+                          : pick == 2 ? hypercube3()
+                                      : cycle_graph(std::max(3, n));
+        base = with_random_chords(rng, base, std::uniform_int_distribution<int>(0, 3)(rng));
+        SmallGraph g = relabel(base, random_permutation(rng, base.n));
+        g.name = tag + "-" + base.name;
+        zoo.push_back(g);
+        break;
+      }
+      default: {  // two random components
+        const int a = std::uniform_int_distribution<int>(1, 6)(rng);
+        const int b = std::uniform_int_distribution<int>(1, 6)(rng);
+        SmallGraph g = disjoint_union(random_connected(rng, a, a, tag), random_gnp(rng, b, 0.5, tag));
+        g = relabel(g, random_permutation(rng, g.n));
+        g.name = tag + "-union";
+        zoo.push_back(g);
+        break;
+      }
+    }
+  }
+  return zoo;
+}
+
+bool close(LD actual, LD expected, LD rel) {
+  return std::abs(actual - expected) <= rel * std::max<LD>(1, std::abs(expected));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Oracle: Delta(s, k) by enumerating every shortest path explicitly (no dynamic programme)
+// ---------------------------------------------------------------------------------------------
+
+struct OracleTable {
+  int n = 0;
+  int diameter = 0;
+  bool connected = true;
+  std::vector<int> eccentricity;
+  std::vector<std::vector<LD>> delta;  // delta[s][k - 1], k = 1..eccentricity[s]
+};
+
+OracleTable oracle_delta(const SmallGraph& g, TieMode mode) {
+  const int n = g.n;
+  const auto N = static_cast<std::size_t>(n);
+  std::vector<std::vector<int>> adj(N, std::vector<int>(N, 0));
+  for (const auto& [u, v] : g.edges)
+    adj[static_cast<std::size_t>(u)][static_cast<std::size_t>(v)] =
+        adj[static_cast<std::size_t>(v)][static_cast<std::size_t>(u)] = 1;
+  std::vector<int> deg(N, 0);
+  for (std::size_t u = 0; u < N; ++u)
+    for (std::size_t v = 0; v < N; ++v) deg[u] += adj[u][v];
+  // Hop distances by Floyd-Warshall.
+  const int inf = 1 << 20;
+  std::vector<std::vector<int>> dist(N, std::vector<int>(N, inf));
+  for (std::size_t u = 0; u < N; ++u) {
+    dist[u][u] = 0;
+    for (std::size_t v = 0; v < N; ++v)
+      if (adj[u][v]) dist[u][v] = 1;
+  }
+  for (std::size_t m = 0; m < N; ++m)
+    for (std::size_t u = 0; u < N; ++u)
+      for (std::size_t v = 0; v < N; ++v) dist[u][v] = std::min(dist[u][v], dist[u][m] + dist[m][v]);
+
+  OracleTable t;
+  t.n = n;
+  t.eccentricity.assign(N, 0);
+  t.delta.assign(N, {});
+  for (std::size_t s = 0; s < N; ++s) {
+    // A walk s = u_0, ..., u_k is a shortest path iff dist(s, u_t) = t for every t; enumerate them
+    // all by depth-first search and record every path's degree-difference sum at its end node.
+    std::vector<std::vector<LD>> sums(N);
+    std::function<void(std::size_t, LD)> dfs = [&](std::size_t u, LD sum) {
+      sums[u].push_back(sum);
+      for (std::size_t w = 0; w < N; ++w) {
+        if (adj[u][w] && dist[s][w] == dist[s][u] + 1) dfs(w, sum + std::abs(LD(deg[u]) - LD(deg[w])));
+      }
+    };
+    dfs(s, 0);
+    int ecc = 0;
+    for (std::size_t v = 0; v < N; ++v) {
+      if (dist[s][v] >= inf) {
+        t.connected = false;
+        REQUIRE(sums[v].empty());
+      } else {
+        ecc = std::max(ecc, dist[s][v]);
+        REQUIRE_FALSE(sums[v].empty());
+      }
+    }
+    t.eccentricity[s] = ecc;
+    t.diameter = std::max(t.diameter, ecc);
+    t.delta[s].assign(static_cast<std::size_t>(ecc), 0);
+    for (std::size_t v = 0; v < N; ++v) {
+      if (v == s || dist[s][v] >= inf) continue;
+      const std::vector<LD>& list = sums[v];
+      LD contribution = 0;
+      switch (mode) {
+        case TieMode::all:
+          for (LD x : list) contribution += x;
+          break;
+        case TieMode::mean:
+          for (LD x : list) contribution += x;
+          contribution /= static_cast<LD>(list.size());
+          break;
+        case TieMode::min:
+          contribution = *std::min_element(list.begin(), list.end());
+          break;
+      }
+      t.delta[s][static_cast<std::size_t>(dist[s][v] - 1)] += contribution;
+    }
+  }
+  return t;
+}
+
+/// A second, scalar reference for graphs too large to enumerate paths: the recurrence of
+/// ALGORITHMS.md section 4 with one plain BFS per source, in long double.
+OracleTable scalar_bfs_delta(const SmallGraph& g, TieMode mode) {
+  const auto N = static_cast<std::size_t>(g.n);
+  std::vector<std::vector<int>> adj(N);
+  for (const auto& [u, v] : g.edges) {
+    adj[static_cast<std::size_t>(u)].push_back(v);
+    adj[static_cast<std::size_t>(v)].push_back(u);
+  }
+  OracleTable t;
+  t.n = g.n;
+  t.eccentricity.assign(N, 0);
+  t.delta.assign(N, {});
+  for (std::size_t s = 0; s < N; ++s) {
+    std::vector<int> dist(N, -1);
+    std::vector<LD> count(N, 0), sum(N, 0), best(N, std::numeric_limits<LD>::infinity());
+    std::vector<std::size_t> order{s};
+    dist[s] = 0;
+    count[s] = 1;
+    best[s] = 0;
+    for (std::size_t head = 0; head < order.size(); ++head) {
+      const std::size_t u = order[head];
+      for (const int wi : adj[u]) {
+        const auto w = static_cast<std::size_t>(wi);
+        if (dist[w] < 0) {
+          dist[w] = dist[u] + 1;
+          order.push_back(w);
+        }
+        if (dist[w] == dist[u] + 1) {
+          const LD diff = std::abs(LD(adj[u].size()) - LD(adj[w].size()));
+          count[w] += count[u];
+          sum[w] += sum[u] + count[u] * diff;
+          best[w] = std::min(best[w], best[u] + diff);
+        }
+      }
+    }
+    if (order.size() < N) t.connected = false;
+    const int ecc = dist[order.back()];
+    t.eccentricity[s] = ecc;
+    t.diameter = std::max(t.diameter, ecc);
+    t.delta[s].assign(static_cast<std::size_t>(ecc), 0);
+    for (const std::size_t v : order) {
+      if (v == s) continue;
+      const LD x = mode == TieMode::all ? sum[v] : mode == TieMode::mean ? sum[v] / count[v] : best[v];
+      t.delta[s][static_cast<std::size_t>(dist[v] - 1)] += x;
+    }
+  }
+  return t;
+}
+
+void require_table_matches(const cge::DegreeSumTable& table, const OracleTable& expected) {
+  REQUIRE(table.num_nodes == expected.n);
+  REQUIRE(table.diameter == expected.diameter);
+  REQUIRE(table.connected == expected.connected);
+  // Compare every value, but assert once (millions of Catch assertions would dominate the run time).
+  long long mismatches = 0;
+  std::string first;
+  for (int s = 0; s < expected.n; ++s) {
+    REQUIRE(table.eccentricity(s) == expected.eccentricity[static_cast<std::size_t>(s)]);
+    for (int k = 1; k <= expected.eccentricity[static_cast<std::size_t>(s)]; ++k) {
+      const LD want = expected.delta[static_cast<std::size_t>(s)][static_cast<std::size_t>(k - 1)];
+      if (!close(table.delta(s, k), want, 1e-12L) && mismatches++ == 0) {
+        first = "Delta(" + std::to_string(s) + ", " + std::to_string(k) + ") = " + std::to_string(table.delta(s, k)) +
+                ", reference " + std::to_string(static_cast<double>(want));
+      }
+    }
+  }
+  INFO("first mismatch: " << first);
+  REQUIRE(mismatches == 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Oracle: E, H, I by the direct formula alpha^E in long double
+// ---------------------------------------------------------------------------------------------
+
+struct OracleEntropy {
+  std::vector<LD> exponents;
+  LD entropy = 0;
+  LD index = 0;
+};
+
+OracleEntropy oracle_entropy(const OracleTable& t, const std::function<LD(int, int)>& coefficient, bool normalise,
+                             LD alpha, LD lambda) {
+  OracleEntropy out;
+  const int rho = t.diameter;
+  for (int v = 0; v < t.n; ++v) {
+    LD e = 0;
+    for (int k = 1; k <= t.eccentricity[static_cast<std::size_t>(v)]; ++k) {
+      e += coefficient(k, rho) * t.delta[static_cast<std::size_t>(v)][static_cast<std::size_t>(k - 1)];
+    }
+    out.exponents.push_back(e);
+  }
+  if (normalise) {
+    LD mean = 0;
+    for (LD e : out.exponents) mean += e;
+    mean /= static_cast<LD>(t.n);
+    if (mean > 0) {
+      for (LD& e : out.exponents) e /= mean;
+    }
+  }
+  std::vector<LD> f;
+  LD z = 0;
+  for (LD e : out.exponents) {
+    f.push_back(std::pow(alpha, e));
+    z += f.back();
+  }
+  // The direct formula is only trusted while it neither overflows nor underflows.
+  REQUIRE(std::isfinite(z));
+  REQUIRE(z > 0);
+  for (LD fv : f) REQUIRE(std::isnormal(fv));
+  LD h = 0;
+  for (LD fv : f) {
+    const LD p = fv / z;
+    if (p > 0) h -= p * std::log2(p);
+  }
+  out.entropy = h;
+  out.index = lambda * (std::log2(static_cast<LD>(t.n)) - h);
+  return out;
+}
+
+LD exp_coefficient(int k, int rho) { return static_cast<LD>(rho) * std::exp(LD(1) - LD(k)); }
+LD linear_coefficient(int k, int rho) { return static_cast<LD>(rho - k + 1); }
+LD constant_coefficient(int, int) { return 1; }
+
+/// A custom coefficient policy for the tests: increasing in k, depending on rho.
+struct RampCoefficient {
+  double operator()(int k, int rho) const { return 0.5 * k + 1.0 / (1.0 + rho); }
+};
+LD ramp_coefficient(int k, int rho) { return LD(0.5) * k + LD(1) / (LD(1) + rho); }
+
+const char* tie_name(TieMode m) {
+  switch (m) {
+    case TieMode::all:
+      return "all";
+    case TieMode::mean:
+      return "mean";
+    case TieMode::min:
+      return "min";
+  }
+  return "?";
+}
+
+const TieMode kTieModes[] = {TieMode::all, TieMode::mean, TieMode::min};
+
+template <typename Entropy>
+void check_against_oracle(const Entropy& dde, const cge::Graph<double>& g, const OracleTable& table,
+                          const std::function<LD(int, int)>& coefficient) {
+  const bool normalise = dde.scaling.kind == cge::ScalingKind::normalised_mean;
+  const OracleEntropy expected = oracle_entropy(table, coefficient, normalise, dde.settings.alpha, dde.settings.lambda);
+  const auto r = dde.compute(g);
+  REQUIRE(r.exponents.size() == expected.exponents.size());
+  for (std::size_t v = 0; v < r.exponents.size(); ++v) {
+    INFO("node " << v << ": E = " << r.exponents[v] << ", oracle " << static_cast<double>(expected.exponents[v]));
+    REQUIRE(close(r.exponents[v], expected.exponents[v], 1e-12L));
+  }
+  INFO("H = " << r.entropy_bits << ", oracle " << static_cast<double>(expected.entropy)
+              << "; I = " << r.information_index << ", oracle " << static_cast<double>(expected.index));
+  REQUIRE(close(r.entropy_bits, expected.entropy, 1e-12L));
+  REQUIRE(close(r.information_index, expected.index, 1e-12L));
+  REQUIRE(r.max_entropy_bits == Approx(std::log2(static_cast<double>(table.n))).epsilon(1e-15));
+  REQUIRE(r.diameter == table.diameter);
+  REQUIRE(r.connected == table.connected);
+}
+
+bool is_connected(const cge::Graph<double>& g) {
+  if (g.num_nodes() == 0) return true;
+  std::vector<char> seen(static_cast<std::size_t>(g.num_nodes()), 0);
+  std::vector<std::int32_t> stack{0};
+  seen[0] = 1;
+  std::int32_t count = 1;
+  while (!stack.empty()) {
+    const std::int32_t u = stack.back();
+    stack.pop_back();
+    for (const std::int32_t w : g.neighbors(u)) {
+      if (!seen[static_cast<std::size_t>(w)]) {
+        seen[static_cast<std::size_t>(w)] = 1;
+        ++count;
+        stack.push_back(w);
+      }
+    }
+  }
+  return count == g.num_nodes();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("shortest_path_degree_sums agrees with shortest-path enumeration on small graphs", "[dde][oracle]") {
+  const std::vector<SmallGraph> zoo = small_graph_zoo(400);
+  int disconnected = 0;
+  long long nonzero_values = 0;
+  for (const SmallGraph& sg : zoo) {
+    const cge::Graph<double> g = to_graph(sg);
+    for (const TieMode mode : kTieModes) {
+      INFO("graph " << sg.name << " (" << sg.n << " nodes, " << sg.edges.size() << " edges), ties " << tie_name(mode));
+      const OracleTable expected = oracle_delta(sg, mode);
+      const cge::DegreeSumTable table = cge::shortest_path_degree_sums(g, mode);
+      REQUIRE(table.num_nodes == sg.n);
+      REQUIRE(table.diameter == expected.diameter);
+      REQUIRE(table.connected == expected.connected);
+      REQUIRE(table.row_offsets.size() == static_cast<std::size_t>(sg.n) + 1);
+      for (int s = 0; s < sg.n; ++s) {
+        REQUIRE(table.eccentricity(s) == expected.eccentricity[static_cast<std::size_t>(s)]);
+        for (int k = 1; k <= expected.eccentricity[static_cast<std::size_t>(s)]; ++k) {
+          const LD want = expected.delta[static_cast<std::size_t>(s)][static_cast<std::size_t>(k - 1)];
+          INFO("Delta(" << s << ", " << k << ") = " << table.delta(s, k) << ", oracle " << static_cast<double>(want));
+          REQUIRE(close(table.delta(s, k), want, 1e-12L));
+          if (want != 0) ++nonzero_values;
+        }
+        // Beyond the eccentricity (and for k = 0) delta() reads 0.
+        REQUIRE(table.delta(s, 0) == 0.0);
+        REQUIRE(table.delta(s, expected.eccentricity[static_cast<std::size_t>(s)] + 1) == 0.0);
+      }
+      if (!expected.connected && mode == TieMode::all) ++disconnected;
+    }
+  }
+  // The zoo must exercise what it claims to: disconnected inputs and non-trivial sums.
+  CHECK(zoo.size() > 450);
+  CHECK(disconnected > 50);
+  CHECK(nonzero_values > 10000);
+}
+
+TEST_CASE("tie modes differ where paths tie with different sums", "[dde][oracle]") {
+  // K_{1,2} glued: 0 - {1, 2} - 3 with 1 also joined to a pendant 4. Node 3 is reached from 0 by two
+  // shortest paths through nodes of different degree, so the three tie modes must disagree.
+  const SmallGraph sg{"diamond+pendant", 5, {{0, 1}, {0, 2}, {1, 3}, {2, 3}, {1, 4}}};
+  // degrees: 0:2, 1:3, 2:2, 3:2, 4:1. Paths 0-1-3: 1 + 1 = 2; 0-2-3: 0 + 0 = 0.
+  const cge::Graph<double> g = to_graph(sg);
+  const auto all = cge::shortest_path_degree_sums(g, TieMode::all);
+  const auto mean = cge::shortest_path_degree_sums(g, TieMode::mean);
+  const auto min = cge::shortest_path_degree_sums(g, TieMode::min);
+  // Distance 2 from 0: node 3 (sums 2 and 0) and node 4 via 0-1-4 (1 + 2 = 3).
+  REQUIRE(all.delta(0, 2) == 5.0);
+  REQUIRE(mean.delta(0, 2) == 4.0);
+  REQUIRE(min.delta(0, 2) == 3.0);
+  // Distance 1 from 0: nodes 1 (|2-3| = 1) and 2 (0): no ties, all modes agree.
+  REQUIRE(all.delta(0, 1) == 1.0);
+  REQUIRE(mean.delta(0, 1) == 1.0);
+  REQUIRE(min.delta(0, 1) == 1.0);
+}
+
+TEST_CASE("shortest_path_degree_sums agrees with path enumeration beyond one block of 64 sources", "[dde][oracle]") {
+  // The sweep runs 64 sources at a time: sizes around multiples of 64, and components that a
+  // block straddles.
+  std::mt19937 rng(6464);
+  std::vector<SmallGraph> graphs;
+  for (const int n : {63, 64, 65, 100, 127, 128, 129, 150}) {
+    graphs.push_back(random_connected(rng, n, n / 5, "big"));
+  }
+  graphs.push_back(grid_graph(8, 9));
+  graphs.push_back(relabel(grid_graph(7, 10), random_permutation(rng, 70)));
+  graphs.push_back(complete_bipartite(3, 70));
+  {
+    SmallGraph g = disjoint_union(random_connected(rng, 40, 10, "a"),
+                                  disjoint_union(random_connected(rng, 50, 8, "b"), isolated(3)));
+    graphs.push_back(relabel(g, random_permutation(rng, g.n)));
+  }
+  graphs.push_back(random_gnp(rng, 130, 0.012, "sparse"));  // many small components
+  for (const SmallGraph& sg : graphs) {
+    const cge::Graph<double> g = to_graph(sg);
+    for (const TieMode mode : kTieModes) {
+      INFO("graph " << sg.name << " (" << sg.n << " nodes), ties " << tie_name(mode));
+      require_table_matches(cge::shortest_path_degree_sums(g, mode), oracle_delta(sg, mode));
+    }
+  }
+}
+
+TEST_CASE("shortest_path_degree_sums agrees with a scalar BFS on larger tie-rich graphs", "[dde][oracle]") {
+  std::mt19937 rng(31337);
+  std::vector<SmallGraph> graphs;
+  graphs.push_back(grid_graph(18, 20));
+  graphs.push_back(with_random_chords(rng, grid_graph(15, 15), 20));
+  graphs.push_back(relabel(complete_bipartite(20, 45), random_permutation(rng, 65)));
+  graphs.push_back(random_connected(rng, 300, 150, "c"));
+  {
+    SmallGraph g = disjoint_union(grid_graph(9, 9), disjoint_union(random_connected(rng, 120, 60, "d"), isolated(5)));
+    graphs.push_back(relabel(g, random_permutation(rng, g.n)));
+  }
+  for (const SmallGraph& sg : graphs) {
+    const cge::Graph<double> g = to_graph(sg);
+    for (const TieMode mode : kTieModes) {
+      INFO("graph " << sg.name << " (" << sg.n << " nodes), ties " << tie_name(mode));
+      require_table_matches(cge::shortest_path_degree_sums(g, mode), scalar_bfs_delta(sg, mode));
+    }
+  }
+  // The scalar reference itself agrees with path enumeration on the small zoo.
+  for (const SmallGraph& sg : small_graph_zoo(60)) {
+    for (const TieMode mode : kTieModes) {
+      const OracleTable a = oracle_delta(sg, mode);
+      const OracleTable b = scalar_bfs_delta(sg, mode);
+      REQUIRE(a.diameter == b.diameter);
+      for (int v = 0; v < sg.n; ++v) {
+        for (std::size_t k = 0; k < a.delta[static_cast<std::size_t>(v)].size(); ++k) {
+          REQUIRE(close(b.delta[static_cast<std::size_t>(v)][k], a.delta[static_cast<std::size_t>(v)][k], 1e-15L));
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("DegreeDegreeEntropy::compute agrees with the direct formula on small graphs", "[dde][oracle]") {
+  const std::vector<SmallGraph> zoo = small_graph_zoo(120);
+  const LD alphas[] = {0.5L, 0.9L, 2.0L};
+  const LD lambdas[] = {1.0L, 2.5L};
+  const cge::ScalingKind scalings[] = {cge::ScalingKind::raw, cge::ScalingKind::normalised_mean};
+  const std::pair<cge::CoefficientKind, LD (*)(int, int)> standard[] = {
+      {cge::CoefficientKind::exp, &exp_coefficient},
+      {cge::CoefficientKind::linear, &linear_coefficient},
+      {cge::CoefficientKind::constant, &constant_coefficient}};
+  long long checked = 0;
+  for (const SmallGraph& sg : zoo) {
+    const cge::Graph<double> g = to_graph(sg);
+    for (const TieMode mode : kTieModes) {
+      const OracleTable table = oracle_delta(sg, mode);
+      for (const LD alpha : alphas) {
+        for (const LD lambda : lambdas) {
+          for (const cge::ScalingKind scaling : scalings) {
+            INFO("graph " << sg.name << ", ties " << tie_name(mode) << ", alpha " << static_cast<double>(alpha)
+                          << ", lambda " << static_cast<double>(lambda) << ", normalised "
+                          << (scaling == cge::ScalingKind::normalised_mean));
+            cge::DegreeDegreeSettings<double> settings;
+            settings.alpha = static_cast<double>(alpha);
+            settings.lambda = static_cast<double>(lambda);
+            settings.ties = mode;
+            for (const auto& [kind, oracle_coefficient] : standard) {
+              INFO("coefficients " << static_cast<int>(kind));
+              cge::DegreeDegreeEntropy<double> dde(settings, cge::StandardCoefficients{kind},
+                                                   cge::ExponentScaling{scaling});
+              check_against_oracle(dde, g, table, oracle_coefficient);
+              ++checked;
+            }
+            INFO("custom coefficients");
+            cge::DegreeDegreeEntropy<double, cge::CustomCoefficients<RampCoefficient>> custom(
+                settings, cge::custom_coefficients(RampCoefficient{}), cge::ExponentScaling{scaling});
+            check_against_oracle(custom, g, table, &ramp_coefficient);
+            ++checked;
+          }
+        }
+      }
+    }
+  }
+  CHECK(checked > 20000);
+}
+
+TEST_CASE("DegreeDegreeEntropy: compute equals from_table of the same Delta table", "[dde]") {
+  std::mt19937 rng(99);
+  for (int trial = 0; trial < 30; ++trial) {
+    const SmallGraph sg = random_connected(rng, 30, 40, "t");
+    const cge::Graph<double> g = to_graph(sg);
+    for (const TieMode mode : kTieModes) {
+      cge::DegreeDegreeSettings<double> s;
+      s.ties = mode;
+      s.alpha = 0.7;
+      const cge::DegreeDegreeEntropy<double> dde(s);
+      const auto a = dde.compute(g);
+      const auto b = dde.from_table(cge::shortest_path_degree_sums(g, mode));
+      REQUIRE(a.exponents == b.exponents);
+      REQUIRE(a.entropy_bits == b.entropy_bits);
+      REQUIRE(a.information_index == b.information_index);
+      REQUIRE(dde.information_index(g) == a.information_index);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Worked values of ALGORITHMS.md section 4 (exp coefficients, log2, lambda = 1)
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("worked values: star K_{1,4}", "[dde][spec]") {
+  const cge::Graph<double> g = to_graph(complete_bipartite(1, 4));  // node 0 is the centre
+  const cge::StandardCoefficients c;
+  REQUIRE(c(1, 2) == Approx(2.0).epsilon(1e-15));
+  REQUIRE(c(2, 2) == Approx(2.0 / std::exp(1.0)).epsilon(1e-15));
+
+  cge::DegreeDegreeSettings<double> s;
+  s.alpha = 0.5;
+  const auto r = cge::DegreeDegreeEntropy<double>(s).compute(g);
+  REQUIRE(r.diameter == 2);
+  REQUIRE(r.connected);
+  REQUIRE(r.exponents[0] == Approx(24.0).epsilon(1e-12));
+  for (int leaf = 1; leaf <= 4; ++leaf)
+    REQUIRE(r.exponents[static_cast<std::size_t>(leaf)] == Approx(19.2436598821719).epsilon(1e-12));
+  REQUIRE(r.entropy_bits == Approx(2.05687613876156).epsilon(1e-12));
+  REQUIRE(r.information_index == Approx(0.2650519561258).epsilon(1e-12));
+  // The default settings are the paper's (alpha 0.5, lambda 1, exp coefficients, all ties).
+  REQUIRE(cge::DegreeDegreeEntropy<double>().information_index(g) == Approx(0.2650519561258).epsilon(1e-12));
+}
+
+TEST_CASE("worked values: path P5", "[dde][spec]") {
+  const cge::Graph<double> g = to_graph(path_graph(5));
+  const double expected_e[] = {6.41115544457513, 4.54134113294645, 2.94303552937154, 4.54134113294645,
+                               6.41115544457513};
+  cge::DegreeDegreeSettings<double> s;
+  s.alpha = 0.5;
+  const auto half = cge::DegreeDegreeEntropy<double>(s).compute(g);
+  REQUIRE(half.diameter == 4);
+  for (std::size_t v = 0; v < 5; ++v) REQUIRE(half.exponents[v] == Approx(expected_e[v]).epsilon(1e-12));
+  REQUIRE(half.entropy_bits == Approx(1.79447339502927).epsilon(1e-12));
+  REQUIRE(half.information_index == Approx(0.527454699858088).epsilon(1e-12));
+  s.alpha = 2;
+  const auto two = cge::DegreeDegreeEntropy<double>(s).compute(g);
+  REQUIRE(two.information_index == Approx(0.415966219967475).epsilon(1e-12));
+  // P5 has no ties: the three tie modes give the same exponents.
+  for (const TieMode mode : kTieModes) {
+    s.ties = mode;
+    const auto r = cge::DegreeDegreeEntropy<double>(s).compute(g);
+    for (std::size_t v = 0; v < 5; ++v) REQUIRE(r.exponents[v] == Approx(expected_e[v]).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("worked values: Petersen graph has Delta = 0 and I = 0 for any alpha", "[dde][spec]") {
+  const cge::Graph<double> g = to_graph(petersen());
+  for (const TieMode mode : kTieModes) {
+    const cge::DegreeSumTable t = cge::shortest_path_degree_sums(g, mode);
+    REQUIRE(t.diameter == 2);
+    for (double x : t.values) REQUIRE(x == 0.0);
+  }
+  for (const double alpha : {0.1, 0.5, 0.9, 0.99, 1.0, 2.0, 7.5}) {
+    for (const double lambda : {1.0, 2.5}) {
+      INFO("alpha " << alpha << ", lambda " << lambda);
+      cge::DegreeDegreeSettings<double> s;
+      s.alpha = alpha;
+      s.lambda = lambda;
+      const auto r = cge::DegreeDegreeEntropy<double>(s).compute(g);
+      REQUIRE(r.information_index == Approx(0.0).margin(1e-12));
+      REQUIRE(r.entropy_bits == Approx(std::log2(10.0)).epsilon(1e-14));
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("DegreeDegreeEntropy is invariant under relabelling of nodes", "[dde][invariance]") {
+  std::mt19937 rng(4242);
+  std::vector<SmallGraph> graphs;
+  for (int i = 0; i < 25; ++i)
+    graphs.push_back(random_connected(rng, std::uniform_int_distribution<int>(2, 60)(rng), 50, "c"));
+  for (int i = 0; i < 10; ++i)
+    graphs.push_back(random_gnp(rng, std::uniform_int_distribution<int>(2, 40)(rng), 0.06, "d"));
+  graphs.push_back(grid_graph(6, 7));
+  graphs.push_back(with_random_chords(rng, grid_graph(5, 8), 6));
+  graphs.push_back(complete_bipartite(5, 9));
+  for (const SmallGraph& sg : graphs) {
+    const std::vector<int> perm = random_permutation(rng, sg.n);
+    const cge::Graph<double> g = to_graph(sg);
+    const cge::Graph<double> h = to_graph(relabel(sg, perm));
+    for (const TieMode mode : kTieModes) {
+      for (const double alpha : {0.5, 0.9, 2.0}) {
+        for (const cge::ScalingKind scaling : {cge::ScalingKind::raw, cge::ScalingKind::normalised_mean}) {
+          INFO("graph " << sg.name << ", ties " << tie_name(mode) << ", alpha " << alpha);
+          cge::DegreeDegreeSettings<double> s;
+          s.alpha = alpha;
+          s.ties = mode;
+          const cge::DegreeDegreeEntropy<double> dde(s, cge::StandardCoefficients{}, cge::ExponentScaling{scaling});
+          const auto a = dde.compute(g);
+          const auto b = dde.compute(h);
+          REQUIRE(a.diameter == b.diameter);
+          REQUIRE(a.connected == b.connected);
+          for (int v = 0; v < sg.n; ++v) {
+            REQUIRE(close(b.exponents[static_cast<std::size_t>(perm[static_cast<std::size_t>(v)])],
+                          a.exponents[static_cast<std::size_t>(v)], 1e-12L));
+          }
+          REQUIRE(close(b.entropy_bits, a.entropy_bits, 1e-12L));
+          REQUIRE(close(b.information_index, a.information_index, 1e-12L));
+        }
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("DegreeDegreeEntropy stays finite and in range on 3000-node geometric graphs", "[dde][numerics]") {
+  // A random geometric graph from the frame-graph construction: 3000 random points in 640 x 480,
+  // no dense patches.
+  const int n = 3000;
+  std::mt19937 rng(314159);
+  std::uniform_real_distribution<double> ux(0.0, 640.0);
+  std::uniform_real_distribution<double> uy(0.0, 480.0);
+  std::vector<Eigen::Vector2d> points;
+  for (int i = 0; i < n; ++i) points.emplace_back(ux(rng), uy(rng));
+  cge::GraphBuilderSettings<double> bs;
+  bs.dense_patch_threshold = 1 << 30;
+  // R for pi R^2 n / area = 3; the construction's radius growth (2R, 3R, ...) adds edges on top,
+  // which brings the mean degree to about 7.
+  const double radius = std::sqrt(3.0 * 640.0 * 480.0 / (3.14159265358979 * n));
+  bs.radius_fraction_of_diagonal = radius / 800.0;
+  const cge::Graph<double> g = cge::GraphBuilder<double>(bs).build(cge::ImageRegion<double>{}, points);
+  REQUIRE(g.num_nodes() == n);
+  REQUIRE(is_connected(g));
+  const double mean_degree = 2.0 * g.num_edges() / n;
+  INFO("mean degree " << mean_degree);
+  REQUIRE(mean_degree > 5.0);
+  REQUIRE(mean_degree < 10.0);
+
+  const double log2n = std::log2(static_cast<double>(n));
+  // One O(|V||E|) table (the default tie mode); every (alpha, scaling, lambda) reuses it.
+  const cge::DegreeSumTable table = cge::shortest_path_degree_sums(g, TieMode::all);
+  REQUIRE(table.connected);
+  REQUIRE(table.diameter > 10);
+  for (const double x : table.values) REQUIRE(std::isfinite(x));
+  for (const double alpha : {0.5, 0.9, 0.99, 2.0}) {
+    for (const cge::ScalingKind scaling : {cge::ScalingKind::raw, cge::ScalingKind::normalised_mean}) {
+      for (const double lambda : {1.0, 2.5}) {
+        INFO("alpha " << alpha << ", normalised " << (scaling == cge::ScalingKind::normalised_mean) << ", lambda "
+                      << lambda);
+        cge::DegreeDegreeSettings<double> s;
+        s.alpha = alpha;
+        s.lambda = lambda;
+        const cge::DegreeDegreeEntropy<double> dde(s, cge::StandardCoefficients{}, cge::ExponentScaling{scaling});
+        const auto r = dde.from_table(table);
+        REQUIRE(r.exponents.size() == static_cast<std::size_t>(n));
+        for (const double e : r.exponents) REQUIRE(std::isfinite(e));
+        INFO("H = " << r.entropy_bits << ", I = " << r.information_index
+                    << ", max E = " << *std::max_element(r.exponents.begin(), r.exponents.end()));
+        REQUIRE(std::isfinite(r.entropy_bits));
+        REQUIRE(std::isfinite(r.information_index));
+        REQUIRE(r.entropy_bits >= 0.0);
+        REQUIRE(r.entropy_bits <= log2n + 1e-9);
+        REQUIRE(r.max_entropy_bits == Approx(log2n).epsilon(1e-15));
+        REQUIRE(r.information_index == Approx(lambda * (log2n - r.entropy_bits)).epsilon(1e-12).margin(1e-12));
+        REQUIRE(r.information_index >= -1e-9);
+        REQUIRE(r.diameter == table.diameter);
+      }
+    }
+  }
+}
+
+TEST_CASE("DegreeDegreeEntropy: exponents far beyond the range of alpha^E", "[dde][numerics]") {
+  // Star K_{1,m}: E(centre) = 2 m (m - 1) and E(leaf) = 2 (m - 1) + (2 / e) (m - 1) 2 (m - 1), so
+  // E(centre) - E(leaf) is about 8e4 for m = 400 and alpha^E underflows/overflows any float type.
+  const int m = 400;
+  const cge::Graph<double> g = to_graph(complete_bipartite(1, m));
+  cge::DegreeDegreeSettings<double> s;
+  s.alpha = 0.5;  // leaves dominate: the centre's weight relative to a leaf is 2^-(8e4)
+  const auto small_alpha = cge::DegreeDegreeEntropy<double>(s).compute(g);
+  const double ec = 2.0 * m * (m - 1);
+  const double el = 2.0 * (m - 1) + 2.0 / std::exp(1.0) * (m - 1) * 2.0 * (m - 1);
+  REQUIRE(small_alpha.exponents[0] == Approx(ec).epsilon(1e-12));
+  REQUIRE(small_alpha.exponents[1] == Approx(el).epsilon(1e-12));
+  REQUIRE(ec - el > 5e4);
+  REQUIRE(small_alpha.entropy_bits == Approx(std::log2(static_cast<double>(m))).epsilon(1e-13));
+  s.alpha = 2;  // the centre takes all the mass
+  const auto big_alpha = cge::DegreeDegreeEntropy<double>(s).compute(g);
+  REQUIRE(big_alpha.entropy_bits == Approx(0.0).margin(1e-12));
+  REQUIRE(big_alpha.information_index == Approx(std::log2(static_cast<double>(m + 1))).epsilon(1e-14));
+}
+
+TEST_CASE("DegreeDegreeEntropy: path counts beyond the range of double", "[dde][numerics]") {
+  // A chain of 345 "diamonds" of width 8: 8^345 = 2^1035 shortest paths between the chain's ends.
+  // TieMode::all must say so (std::overflow_error), never return a silently wrong entropy;
+  // TieMode::min needs no counts and must stay exact.
+  const int width = 8;
+  const int diamonds = 345;
+  SmallGraph sg{"diamond chain", 1, {}};
+  for (int i = 0; i < diamonds; ++i) {
+    const int junction = sg.n - 1;
+    const int next = sg.n + width;
+    for (int m = 0; m < width; ++m) {
+      sg.edges.push_back({junction, sg.n + m});
+      sg.edges.push_back({sg.n + m, next});
+    }
+    sg.n += width + 1;
+  }
+  const cge::Graph<double> g = to_graph(sg);
+  cge::DegreeDegreeSettings<double> s;
+  s.ties = TieMode::all;
+  CHECK_THROWS_AS(cge::DegreeDegreeEntropy<double>(s).compute(g), std::overflow_error);
+  s.ties = TieMode::min;
+  const cge::DegreeSumTable table = cge::shortest_path_degree_sums(g, TieMode::min);
+  require_table_matches(table, scalar_bfs_delta(sg, TieMode::min));
+  const auto r = cge::DegreeDegreeEntropy<double>(s).from_table(table);
+  CHECK(std::isfinite(r.entropy_bits));
+  CHECK(std::isfinite(r.information_index));
+
+  // TieMode::mean needs only S / N, so it must not overflow either. The scalar reference keeps
+  // its counts in long double, which holds 2^1035 where long double is wider than double.
+  s.ties = TieMode::mean;
+  const cge::DegreeSumTable mean_table = cge::shortest_path_degree_sums(g, TieMode::mean);
+  const auto r_mean = cge::DegreeDegreeEntropy<double>(s).from_table(mean_table);
+  CHECK(std::isfinite(r_mean.entropy_bits));
+  CHECK(std::isfinite(r_mean.information_index));
+  if (std::numeric_limits<LD>::max_exponent > 1100) {
+    require_table_matches(mean_table, scalar_bfs_delta(sg, TieMode::mean));
+  } else {
+    WARN("long double has no wider range than double here: mean-mode values not checked against the reference");
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("DegreeDegreeEntropy edge cases", "[dde][errors]") {
+  const cge::DegreeDegreeEntropy<double> dde;
+  SECTION("empty graph") {
+    const cge::Graph<double> empty;
+    CHECK_THROWS_AS(dde.compute(empty), std::invalid_argument);
+    CHECK_THROWS_AS(cge::shortest_path_degree_sums(empty), std::invalid_argument);
+    CHECK_THROWS_AS(dde.from_table(cge::DegreeSumTable{}), std::invalid_argument);
+    CHECK_THROWS_AS(dde.compute(cge::Graph<double>::from_edges(0, {}, false)), std::invalid_argument);
+  }
+  SECTION("one node") {
+    const auto r = dde.compute(cge::Graph<double>::from_edges(1, {}, false));
+    CHECK(r.entropy_bits == 0.0);
+    CHECK(r.information_index == 0.0);
+    CHECK(r.diameter == 0);
+    CHECK(r.connected);
+    REQUIRE(r.exponents.size() == 1);
+    CHECK(r.exponents[0] == 0.0);
+  }
+  SECTION("isolated nodes: disconnected, diameter 0, uniform distribution") {
+    const auto r = dde.compute(cge::Graph<double>::from_edges(4, {}, false));
+    CHECK_FALSE(r.connected);
+    CHECK(r.diameter == 0);
+    CHECK(r.entropy_bits == Approx(2.0).epsilon(1e-15));
+    CHECK(r.information_index == Approx(0.0).margin(1e-15));
+  }
+  SECTION("disconnected: diameter is the largest finite distance") {
+    // P3 + P6 + an isolated node: largest finite distance 5 (inside P6).
+    const SmallGraph sg = disjoint_union(path_graph(3), disjoint_union(path_graph(6), isolated(1)));
+    const auto r = dde.compute(to_graph(sg));
+    CHECK_FALSE(r.connected);
+    CHECK(r.diameter == 5);
+    const auto t = cge::shortest_path_degree_sums(to_graph(sg));
+    CHECK(t.eccentricity(0) == 2);
+    CHECK(t.eccentricity(3) == 5);
+    CHECK(t.eccentricity(9) == 0);
+    CHECK(std::isfinite(r.entropy_bits));
+    // A connected graph reports connected.
+    CHECK(dde.compute(to_graph(path_graph(4))).connected);
+  }
+  SECTION("invalid alpha and lambda") {
+    const cge::Graph<double> g = to_graph(path_graph(4));
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const double inf = std::numeric_limits<double>::infinity();
+    for (const double alpha : {0.0, -0.5, nan, inf}) {
+      INFO("alpha " << alpha);
+      cge::DegreeDegreeSettings<double> s;
+      s.alpha = alpha;
+      const cge::DegreeDegreeEntropy<double> bad(s);
+      CHECK_THROWS_AS(bad.compute(g), std::invalid_argument);
+      CHECK_THROWS_WITH(bad.compute(g), Catch::Contains("alpha"));
+      CHECK_THROWS_AS(bad.from_table(cge::shortest_path_degree_sums(g)), std::invalid_argument);
+    }
+    for (const double lambda : {0.0, -1.0, nan, inf}) {
+      INFO("lambda " << lambda);
+      cge::DegreeDegreeSettings<double> s;
+      s.lambda = lambda;
+      const cge::DegreeDegreeEntropy<double> bad(s);
+      CHECK_THROWS_AS(bad.compute(g), std::invalid_argument);
+      CHECK_THROWS_WITH(bad.compute(g), Catch::Contains("lambda"));
+    }
+  }
+}
+
+TEST_CASE("softmax_entropy_bits works in the log domain", "[dde][numerics]") {
+  // Two equal weights: 1 bit, however small the weights are.
+  CHECK(cge::softmax_entropy_bits({-1e5, -1e5}) == Approx(1.0).epsilon(1e-15));
+  CHECK(cge::softmax_entropy_bits({-2e5, -1e5, -1e5, -3e5}) == Approx(1.0).epsilon(1e-15));
+  CHECK(cge::softmax_entropy_bits({1e5, 1e5, 1e5, 1e5}) == Approx(2.0).epsilon(1e-15));
+  // e^-1e5 against e^-2e5: all mass on the first, H = 0 (the second term is e^-1e5 log e^-1e5).
+  const double h = cge::softmax_entropy_bits({-1e5, -2e5});
+  CHECK(std::isfinite(h));
+  CHECK(h == Approx(0.0).margin(1e-300));
+  // p = (1/4, 3/4) encoded with an enormous common offset: H = 2 - (3/4) log2 3.
+  const double offset = -1e5;
+  CHECK(cge::softmax_entropy_bits({offset, offset + std::log(3.0)}) ==
+        Approx(2.0 - 0.75 * std::log2(3.0)).epsilon(1e-9));
+  // Against the plain formula where the plain formula works.
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(-20.0, 20.0);
+  for (int trial = 0; trial < 100; ++trial) {
+    std::vector<double> logs(static_cast<std::size_t>(1 + trial % 17));
+    for (double& l : logs) l = u(rng);
+    LD z = 0;
+    for (double l : logs) z += std::exp(static_cast<LD>(l));
+    LD expected = 0;
+    for (double l : logs) {
+      const LD p = std::exp(static_cast<LD>(l)) / z;
+      expected -= p * std::log2(p);
+    }
+    CHECK(close(cge::softmax_entropy_bits(logs), expected, 1e-13L));
+  }
+  CHECK(cge::softmax_entropy_bits({42.0}) == 0.0);
+  CHECK_THROWS_AS(cge::softmax_entropy_bits({}), std::invalid_argument);
+  CHECK_THROWS_AS(cge::softmax_entropy_bits({0.0, std::numeric_limits<double>::infinity()}), std::overflow_error);
+  CHECK_THROWS_AS(cge::softmax_entropy_bits({0.0, -std::numeric_limits<double>::infinity()}), std::overflow_error);
+  CHECK_THROWS_AS(cge::softmax_entropy_bits({std::numeric_limits<double>::quiet_NaN()}), std::overflow_error);
+}
