@@ -873,6 +873,29 @@ TEST_CASE("GraphBuilder node selection: canonical order is (y, x, kind)", "[buil
   }
 }
 
+TEST_CASE("GraphBuilder node selection: canonical order with crowded rows", "[builder][nodes]") {
+  // Many nodes on few pixel rows exercise the per-band sort for large bands (and duplicates in
+  // them); the order must not depend on the input order.
+  std::mt19937 rng(77);
+  const Image img = make_image(640, 480);
+  std::uniform_real_distribution<double> x(0, 640);
+  std::vector<P> kps;
+  for (int i = 0; i < 400; ++i) kps.emplace_back(std::floor(x(rng) * 4) / 4, i % 3 == 0 ? 100.0 : 100.5);
+  Settings s;
+  s.dense_patch_threshold = 1000;
+  const cge::FrameNodes<double> nodes = GridBuilder(s).build_nodes(img, kps, cge::NoMask{}, cge::NoMask{}, {});
+  std::vector<std::pair<double, double>> expected;
+  for (const P& p : kps) expected.emplace_back(p.y(), p.x());
+  std::sort(expected.begin(), expected.end());
+  expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+  REQUIRE(nodes.positions.size() == expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    REQUIRE(nodes.positions[i] == P(expected[i].second, expected[i].first));
+  }
+  std::shuffle(kps.begin(), kps.end(), rng);
+  REQUIRE(GridBuilder(s).build_nodes(img, kps, cge::NoMask{}, cge::NoMask{}, {}).positions == nodes.positions);
+}
+
 // =============================================================================================
 // Errors
 // =============================================================================================

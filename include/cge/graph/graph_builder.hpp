@@ -163,7 +163,7 @@ class GraphBuilder {
       nodes.positions.push_back(inst.centre_px);
       nodes.kinds.push_back(NodeKind::semantic);
     }
-    canonicalise(nodes);
+    canonicalise(nodes, image);
     return nodes;
   }
 
@@ -207,20 +207,55 @@ class GraphBuilder {
     }
   }
 
-  static void canonicalise(FrameNodes<Scalar>& nodes) {
-    // Sort contiguous records rather than an index permutation: far fewer cache misses.
+  /// Sorts by (y, x, kind) and merges exact duplicates. A counting sort into horizontal bands
+  /// (monotone in y) does most of the work without data-dependent branches; each band's few
+  /// records are then sorted by the full key (insertion sort, or std::sort for a crowded band).
+  void canonicalise(FrameNodes<Scalar>& nodes, const ImageRegion<Scalar>& image) const {
     struct Record {
       Scalar y, x;
       NodeKind kind;
     };
-    const std::size_t n = nodes.positions.size();
-    std::vector<Record> records(n);
-    for (std::size_t i = 0; i < n; ++i) records[i] = Record{nodes.positions[i].y(), nodes.positions[i].x(), nodes.kinds[i]};
-    std::sort(records.begin(), records.end(), [](const Record& a, const Record& b) {
+    auto less = [](const Record& a, const Record& b) {
       if (a.y != b.y) return a.y < b.y;
       if (a.x != b.x) return a.x < b.x;
       return a.kind < b.kind;
-    });
+    };
+    const std::size_t n = nodes.positions.size();
+    // About one band per node, at most one per pixel row.
+    const std::size_t bands = std::max<std::size_t>(1, std::min(n, static_cast<std::size_t>(std::ceil(image.height_px))));
+    const Scalar bands_per_px = static_cast<Scalar>(bands) / image.height_px;
+    auto band_of = [&](Scalar y) {
+      const Scalar b = (y - image.origin_px.y()) * bands_per_px;  // in [0, bands] for validated nodes
+      return std::min(static_cast<std::size_t>(b > 0 ? b : Scalar(0)), bands - 1);
+    };
+    std::vector<std::uint32_t> end(bands + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++end[band_of(nodes.positions[i].y()) + 1];
+    for (std::size_t b = 0; b < bands; ++b) end[b + 1] += end[b];
+    std::vector<Record> records(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Point& p = nodes.positions[i];
+      records[end[band_of(p.y())]++] = Record{p.y(), p.x(), nodes.kinds[i]};
+    }
+    // end[b] is now the end of band b (and the start of band b + 1).
+    constexpr std::size_t kInsertionSortMax = 32;
+    std::size_t first = 0;
+    for (std::size_t b = 0; b < bands; ++b) {
+      const std::size_t last = end[b];
+      if (last - first > kInsertionSortMax) {
+        std::sort(records.begin() + static_cast<std::ptrdiff_t>(first), records.begin() + static_cast<std::ptrdiff_t>(last), less);
+      } else {
+        for (std::size_t i = first + 1; i < last; ++i) {
+          const Record item = records[i];
+          std::size_t k = i;
+          while (k > first && less(item, records[k - 1])) {
+            records[k] = records[k - 1];
+            --k;
+          }
+          records[k] = item;
+        }
+      }
+      first = last;
+    }
     nodes.positions.clear();
     nodes.kinds.clear();
     for (const Record& r : records) {
@@ -234,13 +269,20 @@ class GraphBuilder {
   /// Edges in creation order plus the per-node state of the construction.
   struct Construction {
     struct NewEdge {
-      std::int32_t a, b;
+      std::int32_t u, v;  // u < v
       std::uint8_t round;
     };
-    std::vector<NewEdge> edges;
+    std::vector<NewEdge> edges;  // the first edge_count entries are valid
+    std::size_t edge_count = 0;
     std::vector<std::uint8_t> connected;  // the paper's flag: 1 once a node is in the graph
-    explicit Construction(std::int32_t n) : connected(static_cast<std::size_t>(n), 0) {
-      edges.reserve(static_cast<std::size_t>(n) * 8);
+    explicit Construction(std::int32_t n) : edges(static_cast<std::size_t>(n) * 8), connected(static_cast<std::size_t>(n), 0) {}
+    /// Room for `more` edges past edge_count, so that appends need no capacity check.
+    void reserve_more(std::size_t more) {
+      if (edges.size() < edge_count + more) edges.resize(std::max(edges.size() * 2, edge_count + more));
+    }
+    void append(std::int32_t a, std::int32_t b, std::uint8_t round) {
+      reserve_more(1);
+      edges[edge_count++] = NewEdge{a, b, round};
     }
   };
 
@@ -280,34 +322,42 @@ class GraphBuilder {
     }
     out.connected[static_cast<std::size_t>(v0)] = 1;
 
+    // A node joins next_centres at most once in the whole construction, so n slots always suffice.
     std::vector<std::int32_t> centres{v0};
-    std::vector<std::int32_t> next_centres;
+    std::vector<std::int32_t> next_centres(static_cast<std::size_t>(n));
     for (int round = 1; !centres.empty() && round <= settings.max_rounds; ++round) {
       const bool capped = round >= settings.first_capped_round;
       const std::uint8_t tag = static_cast<std::uint8_t>(std::min(round, 255));
-      next_centres.clear();
+      std::size_t next_count = 0;
       for (const std::int32_t c : centres) {
         Scalar r = radius;  // 2^(t-1) R for attempt t, capped from first_capped_round on
         for (;;) {
           if (capped) r = std::min(r, cap);
-          bool created = false;
+          const std::size_t edges_before = out.edge_count;
+          out.reserve_more(static_cast<std::size_t>(n));  // a query yields at most n - 1 edges
+          // Branch-free appends: "already joined" holds about half the time, a branch on it
+          // would mispredict constantly. Each write lands in a free slot and the counters
+          // advance only when it counts.
           search.for_each_within(c, r, [&](std::int32_t j, Scalar d2) {
-            if (d2 <= last_rr[static_cast<std::size_t>(j)]) return;  // joined during j's turn
-            out.edges.push_back({c, j, tag});
-            created = true;
-            if (!out.connected[static_cast<std::size_t>(j)]) {
-              out.connected[static_cast<std::size_t>(j)] = 1;
-              next_centres.push_back(j);
-            }
+            const std::size_t sj = static_cast<std::size_t>(j);
+            const bool fresh = !(d2 <= last_rr[sj]);  // not joined during j's turn
+            out.edges[out.edge_count] = typename Construction::NewEdge{c < j ? c : j, c < j ? j : c, tag};
+            out.edge_count += static_cast<std::size_t>(fresh);
+            const bool first_join = fresh & (out.connected[sj] == 0);
+            next_centres[next_count] = j;
+            next_count += static_cast<std::size_t>(first_join);
+            out.connected[sj] = static_cast<std::uint8_t>(out.connected[sj] | static_cast<std::uint8_t>(fresh));
           });
+          const bool created = out.edge_count > edges_before;
           const bool stop = created || (capped && r >= cap) || r >= span;
           if (stop) break;  // success; nothing new within the cap; or every node was in reach
           r *= 2;
         }
         last_rr[static_cast<std::size_t>(c)] = r * r;
       }
-      std::sort(next_centres.begin(), next_centres.end());  // canonical order for the next round
-      centres.swap(next_centres);
+      // Canonical order for the next round.
+      centres.assign(next_centres.begin(), next_centres.begin() + static_cast<std::ptrdiff_t>(next_count));
+      std::sort(centres.begin(), centres.end());
     }
   }
 
@@ -341,7 +391,7 @@ class GraphBuilder {
       }
       done[pick] = 1;
       const std::int32_t a = strays[pick];
-      out.edges.push_back({a, best_to[pick], kStrayJoin});
+      out.append(std::min(a, best_to[pick]), std::max(a, best_to[pick]), kStrayJoin);
       out.connected[static_cast<std::size_t>(a)] = 1;
       for (std::size_t s = 0; s < strays.size(); ++s) {
         if (!done[s]) offer(s, a);
@@ -354,17 +404,17 @@ class GraphBuilder {
   static Graph<Scalar> to_graph(FrameNodes<Scalar> nodes, const Construction& built) {
     using NewEdge = typename Construction::NewEdge;
     const std::int32_t n = static_cast<std::int32_t>(nodes.positions.size());
-    const std::size_t m = built.edges.size();
+    const std::size_t m = built.edge_count;
+    const std::vector<NewEdge> created(built.edges.begin(), built.edges.begin() + static_cast<std::ptrdiff_t>(m));
     std::vector<NewEdge> by_v(m), by_uv(m);
     std::vector<std::int32_t> start(static_cast<std::size_t>(n) + 1);
-    auto counting_pass = [&](const std::vector<NewEdge>& in, std::vector<NewEdge>& sorted, bool key_is_max) {
+    auto counting_pass = [&](const std::vector<NewEdge>& in, std::vector<NewEdge>& sorted, bool by_larger) {
       std::fill(start.begin(), start.end(), 0);
-      auto key = [key_is_max](const NewEdge& e) { return key_is_max ? std::max(e.a, e.b) : std::min(e.a, e.b); };
-      for (const NewEdge& e : in) ++start[static_cast<std::size_t>(key(e)) + 1];
+      for (const NewEdge& e : in) ++start[static_cast<std::size_t>(by_larger ? e.v : e.u) + 1];
       for (std::int32_t v = 0; v < n; ++v) start[static_cast<std::size_t>(v) + 1] += start[static_cast<std::size_t>(v)];
-      for (const NewEdge& e : in) sorted[static_cast<std::size_t>(start[static_cast<std::size_t>(key(e))]++)] = e;
+      for (const NewEdge& e : in) sorted[static_cast<std::size_t>(start[static_cast<std::size_t>(by_larger ? e.v : e.u)]++)] = e;
     };
-    counting_pass(built.edges, by_v, true);
+    counting_pass(created, by_v, true);
     counting_pass(by_v, by_uv, false);
 
     Graph<Scalar> g;
@@ -374,8 +424,8 @@ class GraphBuilder {
     g.edge_rounds_.reserve(m);
     const std::vector<Point>& pts = nodes.positions;
     for (const NewEdge& e : by_uv) {
-      const std::int32_t u = std::min(e.a, e.b);
-      const std::int32_t v = std::max(e.a, e.b);
+      const std::int32_t u = e.u;
+      const std::int32_t v = e.v;
       g.edges_.push_back(Edge<Scalar>{u, v, std::sqrt(squared_distance(pts[static_cast<std::size_t>(u)], pts[static_cast<std::size_t>(v)]))});
       g.edge_rounds_.push_back(e.round);
     }

@@ -123,6 +123,8 @@ class GridNeighborSearch {
       ys_[slot] = points[i].y();
     }
     points_ = &points;
+    hit_slot_.resize(n);
+    hit_d2_.resize(n);
   }
 
   template <typename Visit>
@@ -139,6 +141,9 @@ class GridNeighborSearch {
     const Scalar rr = radius * radius;
     const Scalar qx = q.x();
     const Scalar qy = q.y();
+    // Compact the hits of all rows without a branch per candidate (the test is taken about half
+    // the time, so a branch would mispredict constantly), then visit them in one loop.
+    std::size_t hits = 0;
     for (std::int64_t r = r0; r <= r1; ++r) {
       const std::size_t row_base = static_cast<std::size_t>(r * cols_);
       // Cells of a row are contiguous, so one run covers columns c0..c1.
@@ -149,12 +154,12 @@ class GridNeighborSearch {
         const Scalar dx = qx - xs_[static_cast<std::size_t>(k)];
         const Scalar dy = qy - ys_[static_cast<std::size_t>(k)];
         const Scalar d2 = dx * dx + dy * dy;
-        if (d2 <= rr) {
-          const std::int32_t j = members_[static_cast<std::size_t>(k)];
-          if (j != query) visit(j, d2);
-        }
+        hit_slot_[hits] = k;
+        hit_d2_[hits] = d2;
+        hits += static_cast<std::size_t>((d2 <= rr) & (members_[static_cast<std::size_t>(k)] != query));
       }
     }
+    for (std::size_t h = 0; h < hits; ++h) visit(members_[static_cast<std::size_t>(hit_slot_[h])], hit_d2_[h]);
   }
 
  private:
@@ -176,6 +181,10 @@ class GridNeighborSearch {
   std::vector<std::int32_t> cell_start_;
   std::vector<std::int32_t> members_;
   std::vector<Scalar> xs_, ys_;
+  // Scratch for one row run of a query. Mutable: a query changes no observable state, and
+  // GraphBuilder works on its own copy of the policy, so concurrent builds never share it.
+  mutable std::vector<std::int32_t> hit_slot_;
+  mutable std::vector<Scalar> hit_d2_;
 };
 
 }  // namespace cge
