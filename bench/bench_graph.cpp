@@ -1,0 +1,183 @@
+// Graph construction and the entropy measures on random geometric graphs, with igraph's all-pairs
+// distances and a plain all-sources BFS as peers (docs/BENCHMARK.md).
+
+#include <cstdint>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "bench_data.hpp"
+#include "cge/entropy/degree_degree_entropy.hpp"
+#include "cge/entropy/shannon_edge_entropy.hpp"
+#include "cge/graph/graph_builder.hpp"
+#include "cge/graph/neighbor_search.hpp"
+
+#ifdef CGE_BENCH_HAVE_IGRAPH
+#include <igraph.h>
+#endif
+
+namespace {
+
+using cge_bench::mean_degree;
+using cge_bench::rgg_graph;
+using cge_bench::rgg_points;
+
+void graph_counters(benchmark::State& state, const cge::Graph<double>& g) {
+  state.counters["nodes"] = g.num_nodes();
+  state.counters["edges"] = g.num_edges();
+  state.counters["mean_degree"] = mean_degree(g);
+}
+
+void rgg_sizes(benchmark::internal::Benchmark* b) {
+  for (int n : {100, 300, 1000, 3000}) b->Arg(n);
+}
+
+// ---- 1. GraphBuilder, per neighbour-search policy ---------------------------------------------------
+
+template <typename NeighborSearch>
+void BM_GraphBuilder(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const cge_bench::Points& pts = rgg_points(n);
+  const cge::GraphBuilder<double, NeighborSearch> builder(cge_bench::rgg_settings(n));
+  const cge::ImageRegion<double> image = cge_bench::image_region();
+  for (auto _ : state) {
+    cge::Graph<double> g = builder.build(image, pts);
+    benchmark::DoNotOptimize(g);
+  }
+  graph_counters(state, rgg_graph(n));
+  state.counters["R_px"] = cge_bench::rgg_radius_px(n);
+  state.SetComplexityN(n);
+}
+BENCHMARK_TEMPLATE(BM_GraphBuilder, cge::GridNeighborSearch<double>)
+    ->Apply(rgg_sizes)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity();
+BENCHMARK_TEMPLATE(BM_GraphBuilder, cge::BruteForceNeighborSearch<double>)
+    ->Apply(rgg_sizes)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity();
+
+// ---- 2. DegreeDegreeEntropy::compute ----------------------------------------------------------------
+
+void BM_DegreeDegreeEntropy(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const cge::Graph<double>& g = rgg_graph(n);
+  const cge::DegreeDegreeEntropy<double> dde;  // TieMode::all, exp coefficients, alpha 0.5, lambda 1
+  int diameter = 0;
+  for (auto _ : state) {
+    cge::DegreeDegreeResult<double> r = dde.compute(g);
+    benchmark::DoNotOptimize(r);
+    diameter = r.diameter;
+  }
+  graph_counters(state, g);
+  state.counters["diameter"] = diameter;
+  state.SetComplexityN(n);
+}
+BENCHMARK(BM_DegreeDegreeEntropy)->Apply(rgg_sizes)->Unit(benchmark::kMicrosecond)->Complexity();
+
+void BM_DegreeDegreeEntropy_Ties(benchmark::State& state, cge::TieMode ties) {
+  const int n = static_cast<int>(state.range(0));
+  const cge::Graph<double>& g = rgg_graph(n);
+  cge::DegreeDegreeEntropy<double> dde;
+  dde.settings.ties = ties;
+  for (auto _ : state) {
+    cge::DegreeDegreeResult<double> r = dde.compute(g);
+    benchmark::DoNotOptimize(r);
+  }
+  graph_counters(state, g);
+}
+BENCHMARK_CAPTURE(BM_DegreeDegreeEntropy_Ties, mean, cge::TieMode::mean)->Arg(1000)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_DegreeDegreeEntropy_Ties, min, cge::TieMode::min)->Arg(1000)->Unit(benchmark::kMicrosecond);
+
+// ---- 3. Peers: all-pairs unweighted distances ---------------------------------------------------------
+
+/// Hop distances from every source by a plain BFS over the CSR arrays; the distances are reduced
+/// to a checksum (no n x n matrix is written, as the degree-degree entropy writes none either).
+void BM_AllSourcesBfs(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const cge::Graph<double>& g = rgg_graph(n);
+  const std::int32_t* offsets = g.csr_offsets().data();
+  const std::int32_t* adjacency = g.csr_adjacency().data();
+  std::vector<std::int32_t> dist(static_cast<std::size_t>(n), -1);
+  std::vector<std::int32_t> queue(static_cast<std::size_t>(n));
+  for (auto _ : state) {
+    std::int64_t checksum = 0;
+    for (std::int32_t s = 0; s < n; ++s) {
+      dist[static_cast<std::size_t>(s)] = 0;
+      queue[0] = s;
+      std::int32_t head = 0, tail = 1;
+      while (head < tail) {
+        const std::int32_t u = queue[static_cast<std::size_t>(head++)];
+        const std::int32_t next = dist[static_cast<std::size_t>(u)] + 1;
+        for (std::int32_t e = offsets[u]; e < offsets[u + 1]; ++e) {
+          const std::int32_t v = adjacency[e];
+          if (dist[static_cast<std::size_t>(v)] < 0) {
+            dist[static_cast<std::size_t>(v)] = next;
+            queue[static_cast<std::size_t>(tail++)] = v;
+            checksum += next;
+          }
+        }
+      }
+      for (std::int32_t i = 0; i < tail; ++i) dist[static_cast<std::size_t>(queue[static_cast<std::size_t>(i)])] = -1;
+    }
+    benchmark::DoNotOptimize(checksum);
+  }
+  graph_counters(state, g);
+  state.SetComplexityN(n);
+}
+BENCHMARK(BM_AllSourcesBfs)->Apply(rgg_sizes)->Unit(benchmark::kMicrosecond)->Complexity();
+
+#ifdef CGE_BENCH_HAVE_IGRAPH
+/// igraph_distances(all, all, IGRAPH_ALL) on the same graph, converted to an igraph_t once outside
+/// the timed loop; the n x n result matrix is allocated once too (igraph only refills it).
+void BM_IgraphDistances(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const cge::Graph<double>& g = rgg_graph(n);
+  igraph_vector_int_t edge_list;
+  igraph_vector_int_init(&edge_list, 2 * static_cast<igraph_integer_t>(g.num_edges()));
+  igraph_integer_t k = 0;
+  for (const cge::Edge<double>& e : g.edges()) {
+    VECTOR(edge_list)[k++] = e.u;
+    VECTOR(edge_list)[k++] = e.v;
+  }
+  igraph_t ig;
+  if (igraph_create(&ig, &edge_list, n, IGRAPH_UNDIRECTED) != IGRAPH_SUCCESS) {
+    igraph_vector_int_destroy(&edge_list);
+    state.SkipWithError("igraph_create failed");
+    return;
+  }
+  igraph_vector_int_destroy(&edge_list);
+  igraph_matrix_t res;
+  igraph_matrix_init(&res, n, n);
+  for (auto _ : state) {
+    if (igraph_distances(&ig, &res, igraph_vss_all(), igraph_vss_all(), IGRAPH_ALL) != IGRAPH_SUCCESS) {
+      state.SkipWithError("igraph_distances failed");
+      break;
+    }
+    benchmark::DoNotOptimize(MATRIX(res, 0, n - 1));
+    benchmark::ClobberMemory();
+  }
+  igraph_matrix_destroy(&res);
+  igraph_destroy(&ig);
+  graph_counters(state, g);
+  state.SetComplexityN(n);
+}
+BENCHMARK(BM_IgraphDistances)->Apply(rgg_sizes)->Unit(benchmark::kMicrosecond)->Complexity();
+#endif
+
+// ---- 5. ShannonEdgeEntropy ----------------------------------------------------------------------------
+
+void BM_ShannonEdgeEntropy(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const cge::Graph<double>& g = rgg_graph(n);
+  const cge::ShannonEdgeEntropy<double> shannon;
+  for (auto _ : state) {
+    double h = shannon.compute(g);
+    benchmark::DoNotOptimize(h);
+  }
+  graph_counters(state, g);
+  state.SetComplexityN(n);
+}
+BENCHMARK(BM_ShannonEdgeEntropy)->Apply(rgg_sizes)->Unit(benchmark::kMicrosecond)->Complexity();
+
+}  // namespace
