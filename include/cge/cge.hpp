@@ -2,6 +2,7 @@
 // Umbrella header for the core: graph construction and the combinatorial graph entropy measures.
 // Include the individual headers instead when compile time matters.
 
+#include "cge/core/bits.hpp"
 #include "cge/core/image_region.hpp"
 #include "cge/core/mask.hpp"
 #include "cge/core/point_traits.hpp"

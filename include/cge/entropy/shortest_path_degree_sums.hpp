@@ -20,6 +20,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "cge/core/bits.hpp"
 #include "cge/graph/graph.hpp"
 
 namespace cge {
@@ -50,20 +51,6 @@ struct DegreeSumTable {
 };
 
 namespace detail {
-
-/// Index of the lowest set bit of a non-zero word.
-inline int lowest_bit(std::uint64_t word) {
-#if defined(__GNUC__) || defined(__clang__)
-  return __builtin_ctzll(word);
-#else
-  int i = 0;
-  while (!(word & 1u)) {
-    word >>= 1;
-    ++i;
-  }
-  return i;
-#endif
-}
 
 /// Groups the nodes into blocks of up to 64 sources that lie close together in the graph (a BFS
 /// ball grown from the lowest unassigned node), so that the blocks' BFS frontiers overlap and the

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 
+#include "cge/core/bits.hpp"
 #include "cge/core/image_region.hpp"
 #include "cge/core/mask.hpp"
 #include "cge/core/point_traits.hpp"
@@ -333,13 +334,13 @@ class GraphBuilder {
     }
     out.connected[static_cast<std::size_t>(v0)] = 1;
 
-    // A node joins next_centres at most once in the whole construction, so n slots always suffice.
+    // Next round's centres as a node bitmap: reading it word by word gives them in canonical
+    // (ascending) order without a sort.
     std::vector<std::int32_t> centres{v0};
-    std::vector<std::int32_t> next_centres(static_cast<std::size_t>(n));
+    std::vector<std::uint64_t> next_centres((static_cast<std::size_t>(n) + 63) / 64, 0);
     for (int round = 1; !centres.empty() && round <= settings.max_rounds; ++round) {
       const bool capped = round >= settings.first_capped_round;
       const std::uint8_t tag = static_cast<std::uint8_t>(std::min(round, 255));
-      std::size_t next_count = 0;
       for (const std::int32_t c : centres) {
         Scalar r = radius;  // 2^(t-1) R for attempt t, capped from first_capped_round on
         for (;;) {
@@ -347,16 +348,15 @@ class GraphBuilder {
           const std::size_t edges_before = out.edge_count;
           out.reserve_more(static_cast<std::size_t>(n));  // a query yields at most n - 1 edges
           // Branch-free appends: "already joined" holds about half the time, a branch on it
-          // would mispredict constantly. Each write lands in a free slot and the counters
-          // advance only when it counts.
+          // would mispredict constantly. Each write lands in a free slot and the counter
+          // advances only when it counts.
           search.for_each_within(c, r, [&](std::int32_t j, Scalar d2) {
             const std::size_t sj = static_cast<std::size_t>(j);
             const bool fresh = !(d2 <= last_rr[sj]);  // not joined during j's turn
             out.edges[out.edge_count] = typename Construction::NewEdge{c < j ? c : j, c < j ? j : c, tag};
             out.edge_count += static_cast<std::size_t>(fresh);
             const bool first_join = fresh & (out.connected[sj] == 0);
-            next_centres[next_count] = j;
-            next_count += static_cast<std::size_t>(first_join);
+            next_centres[sj >> 6] |= static_cast<std::uint64_t>(first_join) << (sj & 63);
             out.connected[sj] = static_cast<std::uint8_t>(out.connected[sj] | static_cast<std::uint8_t>(fresh));
           });
           const bool created = out.edge_count > edges_before;
@@ -366,9 +366,13 @@ class GraphBuilder {
         }
         last_rr[static_cast<std::size_t>(c)] = r * r;
       }
-      // Canonical order for the next round.
-      centres.assign(next_centres.begin(), next_centres.begin() + static_cast<std::ptrdiff_t>(next_count));
-      std::sort(centres.begin(), centres.end());
+      centres.clear();
+      for (std::size_t w = 0; w < next_centres.size(); ++w) {
+        for (std::uint64_t bits = next_centres[w]; bits; bits &= bits - 1) {
+          centres.push_back(static_cast<std::int32_t>(w * 64 + static_cast<std::size_t>(detail::lowest_bit(bits))));
+        }
+        next_centres[w] = 0;
+      }
     }
   }
 
