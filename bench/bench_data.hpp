@@ -179,7 +179,9 @@ struct OrbScene {
     Frame f;
     double total = 0.0;
     for (const Cluster& c : scene) total += c.weight;
-    auto inside = [](const Point& p) { return p.x() >= 0 && p.y() >= 0 && p.x() < kImageWidth && p.y() < kImageHeight; };
+    auto inside = [](const Point& p) {
+      return p.x() >= 0 && p.y() >= 0 && p.x() < kImageWidth && p.y() < kImageHeight;
+    };
     const Point person_origin(person_box.x0, person_box.y0);
     while (static_cast<int>(f.keypoints.size()) < n) {
       const double kind = rng.uniform();

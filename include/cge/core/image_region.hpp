@@ -36,8 +36,7 @@ struct ImageRegion {
     }
     if (!(std::isfinite(width_px) && width_px > 0) || !(std::isfinite(height_px) && height_px > 0)) {
       std::ostringstream msg;
-      msg << "ImageRegion: width_px and height_px must be finite and positive, got " << width_px << " x "
-          << height_px;
+      msg << "ImageRegion: width_px and height_px must be finite and positive, got " << width_px << " x " << height_px;
       throw std::invalid_argument(msg.str());
     }
   }

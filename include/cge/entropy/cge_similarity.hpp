@@ -131,9 +131,15 @@ class CGESimilarity {
     s.edge_similarity =
         entropy_similarity(current.edge_entropy_bits, candidate.edge_entropy_bits, settings.similarity_exponent);
     switch (semantics.which) {
-      case SemanticCase::both_empty: s.used_edge_entropy = false; break;
-      case SemanticCase::one_empty: s.used_edge_entropy = true; break;
-      case SemanticCase::compared: s.used_edge_entropy = semantics.cosine < settings.semantic_threshold; break;
+      case SemanticCase::both_empty:
+        s.used_edge_entropy = false;
+        break;
+      case SemanticCase::one_empty:
+        s.used_edge_entropy = true;
+        break;
+      case SemanticCase::compared:
+        s.used_edge_entropy = semantics.cosine < settings.semantic_threshold;
+        break;
     }
     s.similarity = s.used_edge_entropy
                        ? settings.degree_weight * s.degree_similarity + (1 - settings.degree_weight) * s.edge_similarity

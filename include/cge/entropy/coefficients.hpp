@@ -23,9 +23,12 @@ struct StandardCoefficients {
 
   double operator()(int k, int diameter) const {
     switch (kind) {
-      case CoefficientKind::exp: return diameter * std::exp(1.0 - k);
-      case CoefficientKind::linear: return static_cast<double>(diameter - k + 1);
-      case CoefficientKind::constant: return 1.0;
+      case CoefficientKind::exp:
+        return diameter * std::exp(1.0 - k);
+      case CoefficientKind::linear:
+        return static_cast<double>(diameter - k + 1);
+      case CoefficientKind::constant:
+        return 1.0;
     }
     throw std::invalid_argument("StandardCoefficients: unknown CoefficientKind");
   }

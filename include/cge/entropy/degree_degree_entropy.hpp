@@ -35,11 +35,11 @@ struct DegreeDegreeSettings {
 
 template <typename Scalar>
 struct DegreeDegreeResult {
-  std::vector<Scalar> exponents;   ///< E(v) per node, after the scaling policy
-  Scalar entropy_bits = 0;         ///< H
-  Scalar max_entropy_bits = 0;     ///< log2 |V|
-  Scalar information_index = 0;    ///< I = lambda (log2 |V| - H)
-  std::int32_t diameter = 0;       ///< rho, the largest finite hop distance
+  std::vector<Scalar> exponents;  ///< E(v) per node, after the scaling policy
+  Scalar entropy_bits = 0;        ///< H
+  Scalar max_entropy_bits = 0;    ///< log2 |V|
+  Scalar information_index = 0;   ///< I = lambda (log2 |V| - H)
+  std::int32_t diameter = 0;      ///< rho, the largest finite hop distance
   bool connected = true;
 };
 

@@ -24,7 +24,8 @@ struct ExponentScaling {
 
   void operator()(std::vector<double>& exponents) const {
     switch (kind) {
-      case ScalingKind::raw: return;
+      case ScalingKind::raw:
+        return;
       case ScalingKind::normalised_mean: {
         if (exponents.empty()) return;
         double total = 0.0;

@@ -35,13 +35,14 @@ enum class TieMode {
 /// Delta(s, k) for every source s and k = 1..eccentricity(s), stored row by row.
 struct DegreeSumTable {
   std::int32_t num_nodes = 0;
-  std::int32_t diameter = 0;  ///< largest finite hop distance
-  bool connected = true;      ///< false when some pair of nodes is unreachable
+  std::int32_t diameter = 0;              ///< largest finite hop distance
+  bool connected = true;                  ///< false when some pair of nodes is unreachable
   std::vector<std::int64_t> row_offsets;  ///< num_nodes + 1 entries into values
   std::vector<double> values;             ///< row s holds Delta(s, 1), ..., Delta(s, ecc(s))
 
   std::int32_t eccentricity(std::int32_t s) const {
-    return static_cast<std::int32_t>(row_offsets[static_cast<std::size_t>(s) + 1] - row_offsets[static_cast<std::size_t>(s)]);
+    return static_cast<std::int32_t>(row_offsets[static_cast<std::size_t>(s) + 1] -
+                                     row_offsets[static_cast<std::size_t>(s)]);
   }
   /// Delta(s, k) for k >= 1; 0 beyond the eccentricity of s.
   double delta(std::int32_t s, std::int32_t k) const {
@@ -254,7 +255,9 @@ void fill_table(const Graph<Scalar>& g, DegreeSumTable& table) {
     const int lanes = static_cast<int>(std::min<std::size_t>(64, order.size() - first));
     const std::int64_t reached = sweep.run(order.data() + first, lanes, block_rows);
     if (reached < static_cast<std::int64_t>(lanes) * n) table.connected = false;
-    for (int i = 0; i < lanes; ++i) rows_by_source[static_cast<std::size_t>(order[first + static_cast<std::size_t>(i)])].swap(block_rows[static_cast<std::size_t>(i)]);
+    for (int i = 0; i < lanes; ++i)
+      rows_by_source[static_cast<std::size_t>(order[first + static_cast<std::size_t>(i)])].swap(
+          block_rows[static_cast<std::size_t>(i)]);
   }
   table.row_offsets.assign(static_cast<std::size_t>(n) + 1, 0);
   for (std::int32_t s = 0; s < n; ++s) {
@@ -274,9 +277,15 @@ DegreeSumTable shortest_path_degree_sums(const Graph<Scalar>& g, TieMode ties = 
   DegreeSumTable table;
   table.num_nodes = g.num_nodes();
   switch (ties) {
-    case TieMode::all: detail::fill_table<TieMode::all>(g, table); break;
-    case TieMode::mean: detail::fill_table<TieMode::mean>(g, table); break;
-    case TieMode::min: detail::fill_table<TieMode::min>(g, table); break;
+    case TieMode::all:
+      detail::fill_table<TieMode::all>(g, table);
+      break;
+    case TieMode::mean:
+      detail::fill_table<TieMode::mean>(g, table);
+      break;
+    case TieMode::min:
+      detail::fill_table<TieMode::min>(g, table);
+      break;
   }
   return table;
 }

@@ -64,7 +64,8 @@ class GraphBuilder {
   NeighborSearch neighbor_search;
 
   GraphBuilder() = default;
-  explicit GraphBuilder(const Settings& s, NeighborSearch ns = NeighborSearch()) : settings(s), neighbor_search(std::move(ns)) {}
+  explicit GraphBuilder(const Settings& s, NeighborSearch ns = NeighborSearch())
+      : settings(s), neighbor_search(std::move(ns)) {}
 
   /// Full construction. `keypoints` is any range of point types adapted by cge::traits::Point2;
   /// the masks are any types adapted by cge::traits::Mask (an empty mask means no dynamic objects);
@@ -224,7 +225,8 @@ class GraphBuilder {
     };
     const std::size_t n = nodes.positions.size();
     // About one band per node, at most one per pixel row.
-    const std::size_t bands = std::max<std::size_t>(1, std::min(n, static_cast<std::size_t>(std::ceil(image.height_px))));
+    const std::size_t bands =
+        std::max<std::size_t>(1, std::min(n, static_cast<std::size_t>(std::ceil(image.height_px))));
     const Scalar bands_per_px = static_cast<Scalar>(bands) / image.height_px;
     auto band_of = [&](Scalar y) {
       const Scalar b = (y - image.origin_px.y()) * bands_per_px;  // in [0, bands] for validated nodes
@@ -244,7 +246,8 @@ class GraphBuilder {
     for (std::size_t b = 0; b < bands; ++b) {
       const std::size_t last = end[b];
       if (last - first > kInsertionSortMax) {
-        std::sort(records.begin() + static_cast<std::ptrdiff_t>(first), records.begin() + static_cast<std::ptrdiff_t>(last), less);
+        std::sort(records.begin() + static_cast<std::ptrdiff_t>(first),
+                  records.begin() + static_cast<std::ptrdiff_t>(last), less);
       } else {
         for (std::size_t i = first + 1; i < last; ++i) {
           const Record item = records[i];
@@ -433,22 +436,26 @@ class GraphBuilder {
       ++offsets[static_cast<std::size_t>(created[k].u) + 1];
       ++offsets[static_cast<std::size_t>(created[k].v) + 1];
     }
-    for (std::int32_t v = 0; v < n; ++v) offsets[static_cast<std::size_t>(v) + 1] += offsets[static_cast<std::size_t>(v)];
+    for (std::int32_t v = 0; v < n; ++v)
+      offsets[static_cast<std::size_t>(v) + 1] += offsets[static_cast<std::size_t>(v)];
 
     // Arcs bucketed by target: (source << 8) | round.
     std::unique_ptr<std::uint64_t[]> by_target(new std::uint64_t[2 * m]);
     std::vector<std::int32_t> fill(offsets.begin(), offsets.end() - 1);
     for (std::size_t k = 0; k < m; ++k) {
       const NewEdge& e = created[k];
-      by_target[static_cast<std::size_t>(fill[static_cast<std::size_t>(e.v)]++)] = (static_cast<std::uint64_t>(e.u) << 8) | e.round;
-      by_target[static_cast<std::size_t>(fill[static_cast<std::size_t>(e.u)]++)] = (static_cast<std::uint64_t>(e.v) << 8) | e.round;
+      by_target[static_cast<std::size_t>(fill[static_cast<std::size_t>(e.v)]++)] =
+          (static_cast<std::uint64_t>(e.u) << 8) | e.round;
+      by_target[static_cast<std::size_t>(fill[static_cast<std::size_t>(e.u)]++)] =
+          (static_cast<std::uint64_t>(e.v) << 8) | e.round;
     }
     // Rows in ascending target order.
     g.adjacency_.resize(2 * m);
     std::unique_ptr<std::uint8_t[]> slot_round(new std::uint8_t[2 * m]);
     std::copy(offsets.begin(), offsets.end() - 1, fill.begin());
     for (std::int32_t target = 0; target < n; ++target) {
-      for (std::int32_t k = offsets[static_cast<std::size_t>(target)]; k < offsets[static_cast<std::size_t>(target) + 1]; ++k) {
+      for (std::int32_t k = offsets[static_cast<std::size_t>(target)];
+           k < offsets[static_cast<std::size_t>(target) + 1]; ++k) {
         const std::uint64_t arc = by_target[static_cast<std::size_t>(k)];
         const std::size_t at = static_cast<std::size_t>(fill[static_cast<std::size_t>(arc >> 8)]++);
         g.adjacency_[at] = target;
@@ -463,7 +470,8 @@ class GraphBuilder {
       for (std::int32_t k = offsets[static_cast<std::size_t>(u)]; k < offsets[static_cast<std::size_t>(u) + 1]; ++k) {
         const std::int32_t v = g.adjacency_[static_cast<std::size_t>(k)];
         if (v < u) continue;
-        g.edges_.push_back(Edge<Scalar>{u, v, std::sqrt(squared_distance(pts[static_cast<std::size_t>(u)], pts[static_cast<std::size_t>(v)]))});
+        g.edges_.push_back(Edge<Scalar>{
+            u, v, std::sqrt(squared_distance(pts[static_cast<std::size_t>(u)], pts[static_cast<std::size_t>(v)]))});
         g.edge_rounds_.push_back(slot_round[static_cast<std::size_t>(k)]);
       }
     }

@@ -25,8 +25,7 @@ namespace cge {
 /// The one membership test of every neighbour search: squared Euclidean distance <= radius^2,
 /// computed the same way everywhere so that all policies agree to the last bit.
 template <typename Scalar>
-inline bool within_radius(const Eigen::Matrix<Scalar, 2, 1>& a, const Eigen::Matrix<Scalar, 2, 1>& b,
-                          Scalar radius) {
+inline bool within_radius(const Eigen::Matrix<Scalar, 2, 1>& a, const Eigen::Matrix<Scalar, 2, 1>& b, Scalar radius) {
   const Scalar dx = a.x() - b.x();
   const Scalar dy = a.y() - b.y();
   return dx * dx + dy * dy <= radius * radius;
