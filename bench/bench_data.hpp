@@ -119,6 +119,37 @@ inline const cge::Graph<double>& rgg_graph(int n) {
   return cache.emplace(n, std::move(g)).first->second;
 }
 
+/// The textbook random geometric graph of rgg_points(n): every pair within R = rgg_radius_px(n) is
+/// joined, so the mean degree is about kTargetMeanDegree (a little less: points near the border
+/// have fewer neighbours). Not connected in general; the entropy ignores unreachable pairs.
+/// Built once by brute force; weights are the pixel lengths.
+inline const cge::Graph<double>& disc_graph(int n) {
+  static std::map<int, cge::Graph<double>> cache;
+  auto it = cache.find(n);
+  if (it != cache.end()) return it->second;
+  const Points& pts = rgg_points(n);
+  const double r = rgg_radius_px(n);
+  std::vector<cge::Edge<double>> edges;
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b) {
+      const double d = (pts[static_cast<std::size_t>(a)] - pts[static_cast<std::size_t>(b)]).norm();
+      if (d <= r) edges.push_back(cge::Edge<double>{a, b, d});
+    }
+  }
+  cge::Graph<double> g = cge::Graph<double>::from_edges(n, std::move(edges), /*weighted=*/true, pts);
+  return cache.emplace(n, std::move(g)).first->second;
+}
+
+/// Which graphs a benchmark runs on.
+enum class GraphFamily {
+  builder,  ///< what GraphBuilder makes of the points (mean degree 8.3 to 8.8)
+  disc,     ///< the disc graph of the same points (mean degree about 6)
+};
+
+inline const cge::Graph<double>& family_graph(GraphFamily family, int n) {
+  return family == GraphFamily::builder ? rgg_graph(n) : disc_graph(n);
+}
+
 inline double mean_degree(const cge::Graph<double>& g) {
   return g.num_nodes() > 0 ? 2.0 * g.num_edges() / g.num_nodes() : 0.0;
 }

@@ -18,6 +18,8 @@
 
 namespace {
 
+using cge_bench::family_graph;
+using cge_bench::GraphFamily;
 using cge_bench::mean_degree;
 using cge_bench::rgg_graph;
 using cge_bench::rgg_points;
@@ -59,9 +61,9 @@ BENCHMARK_TEMPLATE(BM_GraphBuilder, cge::BruteForceNeighborSearch<double>)
 
 // ---- 2. DegreeDegreeEntropy::compute ----------------------------------------------------------------
 
-void BM_DegreeDegreeEntropy(benchmark::State& state) {
+void BM_DegreeDegreeEntropy(benchmark::State& state, GraphFamily family) {
   const int n = static_cast<int>(state.range(0));
-  const cge::Graph<double>& g = rgg_graph(n);
+  const cge::Graph<double>& g = family_graph(family, n);
   const cge::DegreeDegreeEntropy<double> dde;  // TieMode::all, exp coefficients, alpha 0.5, lambda 1
   int diameter = 0;
   for (auto _ : state) {
@@ -73,7 +75,14 @@ void BM_DegreeDegreeEntropy(benchmark::State& state) {
   state.counters["diameter"] = diameter;
   state.SetComplexityN(n);
 }
-BENCHMARK(BM_DegreeDegreeEntropy)->Apply(rgg_sizes)->Unit(benchmark::kMicrosecond)->Complexity();
+BENCHMARK_CAPTURE(BM_DegreeDegreeEntropy, builder, GraphFamily::builder)
+    ->Apply(rgg_sizes)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity();
+BENCHMARK_CAPTURE(BM_DegreeDegreeEntropy, disc, GraphFamily::disc)
+    ->Apply(rgg_sizes)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity();
 
 void BM_DegreeDegreeEntropy_Ties(benchmark::State& state, cge::TieMode ties) {
   const int n = static_cast<int>(state.range(0));
@@ -93,9 +102,9 @@ BENCHMARK_CAPTURE(BM_DegreeDegreeEntropy_Ties, min, cge::TieMode::min)->Arg(1000
 
 /// Hop distances from every source by a plain BFS over the CSR arrays; the distances are reduced
 /// to a checksum (no n x n matrix is written, as the degree-degree entropy writes none either).
-void BM_AllSourcesBfs(benchmark::State& state) {
+void BM_AllSourcesBfs(benchmark::State& state, GraphFamily family) {
   const int n = static_cast<int>(state.range(0));
-  const cge::Graph<double>& g = rgg_graph(n);
+  const cge::Graph<double>& g = family_graph(family, n);
   const std::int32_t* offsets = g.csr_offsets().data();
   const std::int32_t* adjacency = g.csr_adjacency().data();
   std::vector<std::int32_t> dist(static_cast<std::size_t>(n), -1);
@@ -125,14 +134,21 @@ void BM_AllSourcesBfs(benchmark::State& state) {
   graph_counters(state, g);
   state.SetComplexityN(n);
 }
-BENCHMARK(BM_AllSourcesBfs)->Apply(rgg_sizes)->Unit(benchmark::kMicrosecond)->Complexity();
+BENCHMARK_CAPTURE(BM_AllSourcesBfs, builder, GraphFamily::builder)
+    ->Apply(rgg_sizes)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity();
+BENCHMARK_CAPTURE(BM_AllSourcesBfs, disc, GraphFamily::disc)
+    ->Apply(rgg_sizes)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity();
 
 #ifdef CGE_BENCH_HAVE_IGRAPH
 /// igraph_distances(all, all, IGRAPH_ALL) on the same graph, converted to an igraph_t once outside
 /// the timed loop; the n x n result matrix is allocated once too (igraph only refills it).
-void BM_IgraphDistances(benchmark::State& state) {
+void BM_IgraphDistances(benchmark::State& state, GraphFamily family) {
   const int n = static_cast<int>(state.range(0));
-  const cge::Graph<double>& g = rgg_graph(n);
+  const cge::Graph<double>& g = family_graph(family, n);
   igraph_vector_int_t edge_list;
   igraph_vector_int_init(&edge_list, 2 * static_cast<igraph_integer_t>(g.num_edges()));
   igraph_integer_t k = 0;
@@ -162,7 +178,14 @@ void BM_IgraphDistances(benchmark::State& state) {
   graph_counters(state, g);
   state.SetComplexityN(n);
 }
-BENCHMARK(BM_IgraphDistances)->Apply(rgg_sizes)->Unit(benchmark::kMicrosecond)->Complexity();
+BENCHMARK_CAPTURE(BM_IgraphDistances, builder, GraphFamily::builder)
+    ->Apply(rgg_sizes)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity();
+BENCHMARK_CAPTURE(BM_IgraphDistances, disc, GraphFamily::disc)
+    ->Apply(rgg_sizes)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity();
 #endif
 
 // ---- 5. ShannonEdgeEntropy ----------------------------------------------------------------------------
