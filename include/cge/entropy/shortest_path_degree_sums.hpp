@@ -133,25 +133,41 @@ class BitParallelDegreeSums {
     double layer[64];
     double level_max_count[64];
     while (!frontier_.empty()) {
-      // Push the frontier's bits to its neighbours; the touched nodes, masked by what each lane
-      // has already visited, form the next frontier.
-      // Push the frontier's bits to its neighbours, marking them in a node bitmap; reading the
-      // bitmap word by word lists the touched nodes in ascending order without a sort, which
-      // fixes the summation order of the layer sums.
+      // One pass over the frontier's arcs p -> u. The lanes that reach u at this level through p
+      // are previous[p] & ~visited[u] (visited holds the earlier levels only), so p is their
+      // predecessor: initialise the lanes new at u, then accumulate. The frontier is in ascending
+      // order, so every (node, lane) sums its predecessors in ascending order, whatever block
+      // the lane is in. The touched bitmap lists the next frontier in ascending order.
       for (const std::int32_t p : frontier_) {
-        const std::uint64_t word = previous_[static_cast<std::size_t>(p)];
+        const std::uint64_t from_p = previous_[static_cast<std::size_t>(p)];
+        const double deg_p = degree_[static_cast<std::size_t>(p)];
+        const Values* at_p = &values_[static_cast<std::size_t>(p) * 64];
         for (std::int32_t e = offsets[p], end = offsets[p + 1]; e < end; ++e) {
           const std::size_t u = static_cast<std::size_t>(adjacency[e]);
-          current_[u] |= word;
+          std::uint64_t pred = from_p & ~visited_[u];
+          if (!pred) continue;
+          Values* at_u = &values_[u * 64];
+          for (std::uint64_t fresh = pred & ~current_[u]; fresh; fresh &= fresh - 1) {
+            at_u[lowest_bit(fresh)] = Values{0.0, Mode == TieMode::min ? std::numeric_limits<double>::infinity() : 0.0};
+          }
+          current_[u] |= pred;
           touched_[u >> 6] |= std::uint64_t(1) << (u & 63);
+          const double diff = std::fabs(deg_p - degree_[u]);
+          for (; pred; pred &= pred - 1) {
+            const int i = lowest_bit(pred);
+            if (Mode == TieMode::min) {
+              at_u[i].sum = std::min(at_u[i].sum, at_p[i].sum + diff);
+            } else {
+              at_u[i].count += at_p[i].count;
+              at_u[i].sum += at_p[i].sum + at_p[i].count * diff;
+            }
+          }
         }
       }
       next_frontier_.clear();
       for (std::size_t w = 0; w < touched_.size(); ++w) {
         for (std::uint64_t bits = touched_[w]; bits; bits &= bits - 1) {
-          const std::size_t u = w * 64 + static_cast<std::size_t>(lowest_bit(bits));
-          current_[u] &= ~visited_[u];
-          if (current_[u]) next_frontier_.push_back(static_cast<std::int32_t>(u));
+          next_frontier_.push_back(static_cast<std::int32_t>(w * 64 + static_cast<std::size_t>(lowest_bit(bits))));
         }
         touched_[w] = 0;
       }
@@ -166,30 +182,10 @@ class BitParallelDegreeSums {
         const std::uint64_t here = current_[static_cast<std::size_t>(u)];
         visited_[static_cast<std::size_t>(u)] |= here;
         active_lanes |= here;
-        Values* at_u = &values_[static_cast<std::size_t>(u) * 64];
-        for (std::uint64_t m = here; m; m &= m - 1) {
-          at_u[lowest_bit(m)] = Values{0.0, Mode == TieMode::min ? std::numeric_limits<double>::infinity() : 0.0};
-          ++reached;
-        }
-        const double deg_u = degree_[static_cast<std::size_t>(u)];
-        for (std::int32_t e = offsets[u], end = offsets[u + 1]; e < end; ++e) {
-          const std::int32_t p = adjacency[e];
-          std::uint64_t pred = previous_[static_cast<std::size_t>(p)] & here;
-          if (!pred) continue;
-          const double diff = std::fabs(degree_[static_cast<std::size_t>(p)] - deg_u);
-          const Values* at_p = &values_[static_cast<std::size_t>(p) * 64];
-          for (; pred; pred &= pred - 1) {
-            const int i = lowest_bit(pred);
-            if (Mode == TieMode::min) {
-              at_u[i].sum = std::min(at_u[i].sum, at_p[i].sum + diff);
-            } else {
-              at_u[i].count += at_p[i].count;
-              at_u[i].sum += at_p[i].sum + at_p[i].count * diff;
-            }
-          }
-        }
+        const Values* at_u = &values_[static_cast<std::size_t>(u) * 64];
         for (std::uint64_t m = here; m; m &= m - 1) {
           const int i = lowest_bit(m);
+          ++reached;
           layer[i] += Mode == TieMode::mean ? at_u[i].sum / at_u[i].count : at_u[i].sum;
           if (Mode == TieMode::mean) level_max_count[i] = std::max(level_max_count[i], at_u[i].count);
         }
