@@ -1,7 +1,7 @@
 #pragma once
 // Delta(v, k) of ALGORITHMS.md section 4: over the shortest paths of length k that start at v, the
-// sums of absolute degree differences along the path, computed exactly in O(|V| |E|) by one BFS
-// dynamic programme per source, without listing paths.
+// sums of absolute degree differences along the path, computed exactly in O(|V| |E|) by a BFS
+// dynamic programme from every source, without listing paths.
 //
 // For a source s and every node u (predecessors p of u have dist(p) = dist(u) - 1):
 //   N[u] = sum_p N[p]                               number of shortest s-u paths
@@ -9,7 +9,7 @@
 //   M[u] = min_p (M[p] + |d(p) - d(u)|)             smallest degree sum over those paths
 // and Delta(s, k) sums, over the nodes u at distance k, S[u] (TieMode::all), S[u] / N[u]
 // (TieMode::mean) or M[u] (TieMode::min). All three depend only on the graph, never on node
-// numbering. N and S are kept in double: path counts grow exponentially on tie-rich graphs.
+// numbering (up to floating-point rounding, as relabelling changes the summation order). N and S are kept in double: path counts grow exponentially on tie-rich graphs.
 // The sweep runs 64 sources at once, one bit per source (see BitParallelDegreeSums): the same
 // O(|V| |E|) arithmetic, but the BFS bookkeeping costs one word operation per 64 sources.
 
@@ -91,9 +91,10 @@ std::vector<std::int32_t> local_source_order(const Graph<Scalar>& g) {
 /// Delta rows of up to 64 sources at once. Level-synchronous BFS with one bit per source:
 ///   reach_k[u] = (OR over neighbours p of reach_{k-1}[p]) & ~visited[u]
 /// and, for each arc p -> u, the sources for which p is a shortest-path predecessor of u are
-/// exactly the bits of reach_{k-1}[p] & reach_k[u]; only those (source, arc) pairs do arithmetic.
-/// For a fixed source each node accumulates over its neighbours in ascending order, so the
-/// floating-point result is the same whatever block the source is in.
+/// exactly the bits of reach_{k-1}[p] & ~visited[u] (visited holding levels below k); only those
+/// (source, arc) pairs do arithmetic. For a fixed source each node accumulates over its
+/// predecessors in ascending order, so the floating-point result is the same whatever block the
+/// source is in.
 template <TieMode Mode, typename Scalar>
 class BitParallelDegreeSums {
  public:
