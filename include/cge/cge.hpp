@@ -3,6 +3,7 @@
 // Include the individual headers instead when compile time matters.
 
 #include "cge/core/bits.hpp"
+#include "cge/core/concepts.hpp"
 #include "cge/core/image_region.hpp"
 #include "cge/core/mask.hpp"
 #include "cge/core/point_traits.hpp"

@@ -18,6 +18,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "cge/core/concepts.hpp"
 #include "cge/entropy/coefficients.hpp"
 #include "cge/entropy/exponent_scaling.hpp"
 #include "cge/entropy/shortest_path_degree_sums.hpp"
@@ -47,6 +48,12 @@ template <typename Scalar = double, typename Coefficients = StandardCoefficients
 class DegreeDegreeEntropy {
  public:
   static_assert(std::is_floating_point<Scalar>::value, "Scalar must be a floating-point type");
+#if CGE_HAS_CONCEPTS
+  static_assert(CoefficientPolicy<Coefficients>,
+                "Coefficients must satisfy the contract in cge/entropy/coefficients.hpp");
+  static_assert(ExponentScalingPolicy<Scaling>,
+                "Scaling must satisfy the contract in cge/entropy/exponent_scaling.hpp");
+#endif
   using Settings = DegreeDegreeSettings<Scalar>;
   using Result = DegreeDegreeResult<Scalar>;
 

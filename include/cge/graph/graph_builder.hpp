@@ -9,16 +9,19 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "cge/core/bits.hpp"
+#include "cge/core/concepts.hpp"
 #include "cge/core/image_region.hpp"
 #include "cge/core/mask.hpp"
 #include "cge/core/point_traits.hpp"
@@ -56,6 +59,10 @@ struct FrameNodes {
 template <typename Scalar = double, typename NeighborSearch = GridNeighborSearch<Scalar>>
 class GraphBuilder {
  public:
+#if CGE_HAS_CONCEPTS
+  static_assert(NeighborSearchPolicy<NeighborSearch, Scalar>,
+                "NeighborSearch must satisfy the contract in cge/graph/neighbor_search.hpp");
+#endif
   using Point = Eigen::Matrix<Scalar, 2, 1>;
   using Settings = GraphBuilderSettings<Scalar>;
 
@@ -94,6 +101,12 @@ class GraphBuilder {
   FrameNodes<Scalar> build_nodes(const ImageRegion<Scalar>& image, const Keypoints& keypoints,
                                  const OwnMask& own_dynamic_mask, const PartnerMask& partner_dynamic_mask,
                                  const std::vector<SemanticInstance<Scalar>>& instances) const {
+#if CGE_HAS_CONCEPTS
+    static_assert(Point2Like<std::decay_t<decltype(*std::begin(keypoints))>>,
+                  "keypoints must be a range of points adapted by cge::traits::Point2 (cge/core/point_traits.hpp)");
+    static_assert(MaskLike<OwnMask> && MaskLike<PartnerMask>,
+                  "masks must be adapted by cge::traits::Mask (cge/core/mask.hpp)");
+#endif
     validate(image);
     const int mask_w = static_cast<int>(std::lround(image.width_px));
     const int mask_h = static_cast<int>(std::lround(image.height_px));
