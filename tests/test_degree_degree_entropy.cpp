@@ -23,6 +23,7 @@
 #include "cge/entropy/softmax_entropy.hpp"
 #include "cge/graph/graph.hpp"
 #include "cge/graph/graph_builder.hpp"
+#include "test_support.hpp"
 
 namespace {
 
@@ -491,25 +492,7 @@ void check_against_oracle(const Entropy& dde, const cge::Graph<double>& g, const
   REQUIRE(r.connected == table.connected);
 }
 
-bool is_connected(const cge::Graph<double>& g) {
-  if (g.num_nodes() == 0) return true;
-  std::vector<char> seen(static_cast<std::size_t>(g.num_nodes()), 0);
-  std::vector<std::int32_t> stack{0};
-  seen[0] = 1;
-  std::int32_t count = 1;
-  while (!stack.empty()) {
-    const std::int32_t u = stack.back();
-    stack.pop_back();
-    for (const std::int32_t w : g.neighbors(u)) {
-      if (!seen[static_cast<std::size_t>(w)]) {
-        seen[static_cast<std::size_t>(w)] = 1;
-        ++count;
-        stack.push_back(w);
-      }
-    }
-  }
-  return count == g.num_nodes();
-}
+using cge_test::is_connected;
 
 }  // namespace
 

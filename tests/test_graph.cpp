@@ -13,26 +13,14 @@
 #include <vector>
 
 #include "cge/graph/graph.hpp"
+#include "test_support.hpp"
 
 namespace {
 
 using G = cge::Graph<double>;
 using E = cge::Edge<double>;
 
-/// The message of the std::invalid_argument thrown by f; fails the test when f throws nothing or
-/// something else.
-template <typename F>
-std::string invalid_argument_message(F&& f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  } catch (...) {
-    FAIL("threw something other than std::invalid_argument");
-  }
-  FAIL("did not throw");
-  return {};
-}
+using cge_test::invalid_argument_message;
 
 /// A random simple graph as a set of unordered pairs (u < v) with random weights.
 std::vector<E> random_simple_edges(std::mt19937& rng, int n, double p) {

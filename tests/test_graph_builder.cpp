@@ -24,6 +24,7 @@
 #include "cge/graph/graph.hpp"
 #include "cge/graph/graph_builder.hpp"
 #include "cge/graph/neighbor_search.hpp"
+#include "test_support.hpp"
 
 namespace {
 
@@ -35,18 +36,8 @@ using GridBuilder = cge::GraphBuilder<double, cge::GridNeighborSearch<double>>;
 using BruteBuilder = cge::GraphBuilder<double, cge::BruteForceNeighborSearch<double>>;
 using cge::NodeKind;
 
-template <typename F>
-std::string invalid_argument_message(F&& f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  } catch (...) {
-    FAIL("threw something other than std::invalid_argument");
-  }
-  FAIL("did not throw");
-  return {};
-}
+using cge_test::invalid_argument_message;
+using cge_test::is_connected;
 
 Image make_image(double width, double height, P origin = P::Zero()) {
   Image img;
@@ -351,26 +342,6 @@ std::vector<Instance> random_instances(std::mt19937& rng, const Image& img, int 
     out.push_back(make_instance(p.x(), p.y(), std::uniform_int_distribution<int>(0, 5)(rng), (rng() % 3) == 0));
   }
   return out;
-}
-
-bool is_connected(const cge::Graph<double>& g) {
-  if (g.num_nodes() == 0) return true;
-  std::vector<char> seen(static_cast<std::size_t>(g.num_nodes()), 0);
-  std::vector<std::int32_t> stack{0};
-  seen[0] = 1;
-  std::int32_t count = 1;
-  while (!stack.empty()) {
-    const std::int32_t u = stack.back();
-    stack.pop_back();
-    for (const std::int32_t w : g.neighbors(u)) {
-      if (!seen[static_cast<std::size_t>(w)]) {
-        seen[static_cast<std::size_t>(w)] = 1;
-        ++count;
-        stack.push_back(w);
-      }
-    }
-  }
-  return count == g.num_nodes();
 }
 
 }  // namespace
