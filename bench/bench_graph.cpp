@@ -59,6 +59,24 @@ BENCHMARK_TEMPLATE(BM_GraphBuilder, cge::BruteForceNeighborSearch<double>)
     ->Unit(benchmark::kMicrosecond)
     ->Complexity();
 
+/// The allocation-free form: one workspace and one output graph reused across iterations, as a
+/// host scoring many frames would hold them.
+void BM_GraphBuilder_ReusedWorkspace(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const cge::GraphBuilder<double> builder(cge_bench::rgg_settings(n));
+  const auto& points = rgg_points(n);
+  const auto image = cge_bench::image_region();
+  cge::GraphBuilderWorkspace<double> workspace;
+  cge::Graph<double> graph;
+  for (auto _ : state) {
+    builder.build(image, points, cge::NoMask{}, cge::NoMask{}, {}, graph, workspace);
+    benchmark::DoNotOptimize(graph.num_edges());
+  }
+  graph_counters(state, graph);
+  state.SetComplexityN(n);
+}
+BENCHMARK(BM_GraphBuilder_ReusedWorkspace)->Apply(rgg_sizes)->Unit(benchmark::kMicrosecond)->Complexity();
+
 // ---- 2. DegreeDegreeEntropy::compute ----------------------------------------------------------------
 
 void BM_DegreeDegreeEntropy(benchmark::State& state, GraphFamily family) {

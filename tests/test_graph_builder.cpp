@@ -867,6 +867,36 @@ TEST_CASE("GraphBuilder node selection: canonical order with crowded rows", "[bu
   REQUIRE(GridBuilder(s).build_nodes(img, kps, cge::NoMask{}, cge::NoMask{}, {}).positions == nodes.positions);
 }
 
+TEST_CASE("GraphBuilder: a reused workspace and output graph give the same graphs as fresh builds",
+          "[builder][workspace]") {
+  // One workspace and one output graph across frames of very different sizes, masks, instances
+  // and settings: nothing of an earlier build may leak into a later one.
+  std::mt19937 rng(4242);
+  const Image img = make_image(640, 480);
+  cge::GraphBuilderWorkspace<double, cge::GridNeighborSearch<double>> grid_ws;
+  cge::GraphBuilderWorkspace<double, cge::BruteForceNeighborSearch<double>> brute_ws;
+  cge::Graph<double> grid_out, brute_out;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int n = std::uniform_int_distribution<int>(0, trial % 5 == 0 ? 900 : 120)(rng);
+    const std::vector<P> kps = trial % 3 == 0 ? clustered_points(rng, n, img, 4, 12.0) : uniform_points(rng, n, img);
+    const cge::BinaryMask own = random_rect_mask(rng, img, trial % 3);
+    const cge::BinaryMask partner = random_rect_mask(rng, img, (trial + 1) % 3);
+    const std::vector<Instance> inst = random_instances(rng, img, trial % 4);
+    Settings s;
+    s.dense_patch_threshold = std::uniform_int_distribution<int>(2, 30)(rng);
+    s.radius_fraction_of_diagonal = std::uniform_real_distribution<double>(0.005, 0.08)(rng);
+    const GridBuilder grid(s);
+    const BruteBuilder brute(s);
+    const cge::Graph<double> fresh = grid.build(img, kps, own, partner, inst);
+    grid.build(img, kps, own, partner, inst, grid_out, grid_ws);
+    brute.build(img, kps, own, partner, inst, brute_out, brute_ws);
+    REQUIRE(grid_out == fresh);
+    REQUIRE(brute_out == fresh);
+    REQUIRE(grid_out.csr_offsets() == fresh.csr_offsets());
+    REQUIRE(grid_out.csr_adjacency() == fresh.csr_adjacency());
+  }
+}
+
 // =============================================================================================
 // Errors
 // =============================================================================================

@@ -38,6 +38,8 @@ using CoefficientFunction = double (*)(int, int);
   template struct cge::FrameNodes<S>;                                                                               \
   template class cge::GraphBuilder<S, cge::BruteForceNeighborSearch<S>>;                                            \
   template class cge::GraphBuilder<S, cge::GridNeighborSearch<S>>;                                                  \
+  template struct cge::GraphBuilderWorkspace<S, cge::BruteForceNeighborSearch<S>>;                                  \
+  template struct cge::GraphBuilderWorkspace<S, cge::GridNeighborSearch<S>>;                                        \
   template struct cge::DegreeDegreeSettings<S>;                                                                     \
   template struct cge::DegreeDegreeResult<S>;                                                                       \
   template class cge::DegreeDegreeEntropy<S>;                                                                       \

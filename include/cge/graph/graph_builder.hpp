@@ -56,6 +56,84 @@ struct FrameNodes {
   std::vector<NodeKind> kinds;
 };
 
+namespace detail {
+
+/// Edges in creation order plus the per-node state of the construction.
+struct EdgeConstruction {
+  struct NewEdge {
+    std::int32_t u, v;  // u < v
+    std::uint8_t round;
+  };
+  // The first edge_count entries are valid. A plain array, not a vector: slots are written
+  // before they count (branch-free appends), and zero-filling ~100 kB per build is measurable.
+  std::unique_ptr<NewEdge[]> edges;
+  std::size_t capacity = 0;
+  std::size_t edge_count = 0;
+  std::vector<std::uint8_t> connected;  // the paper's flag: 1 once a node is in the graph
+
+  void reset(std::int32_t n) {
+    edge_count = 0;
+    connected.assign(static_cast<std::size_t>(n), 0);
+    reserve_more(static_cast<std::size_t>(n) * 8);
+  }
+  /// Room for `more` edges past edge_count, so that appends need no capacity check.
+  void reserve_more(std::size_t more) {
+    if (capacity >= edge_count + more) return;
+    const std::size_t grown = std::max(capacity * 2, edge_count + more);
+    std::unique_ptr<NewEdge[]> bigger(new NewEdge[grown]);
+    std::copy(edges.get(), edges.get() + edge_count, bigger.get());
+    edges.swap(bigger);
+    capacity = grown;
+  }
+  void append(std::int32_t a, std::int32_t b, std::uint8_t round) {
+    reserve_more(1);
+    edges[edge_count++] = NewEdge{a, b, round};
+  }
+};
+
+/// A node as the canonical sort sees it.
+template <typename Scalar>
+struct NodeRecord {
+  Scalar y, x;
+  NodeKind kind;
+};
+
+/// Grows v to at least n elements without ever shrinking it, so a reused buffer is zero-filled
+/// only the first time it reaches a size.
+template <typename T>
+T* at_least(std::vector<T>& v, std::size_t n) {
+  if (v.size() < n) v.resize(n);
+  return v.data();
+}
+
+}  // namespace detail
+
+/// Buffers that GraphBuilder reuses between builds. Hand the same workspace (and the same output
+/// Graph) to every build in a hot loop and nothing is allocated once they have grown to the
+/// largest frame seen. A workspace never changes a result. Use one per thread; its contents are
+/// scratch, not an interface.
+template <typename Scalar, typename NeighborSearch = GridNeighborSearch<Scalar>>
+struct GraphBuilderWorkspace {
+  using Point = Eigen::Matrix<Scalar, 2, 1>;
+  // Node selection.
+  std::vector<Point> stable;
+  std::vector<std::int32_t> patch_of;
+  std::vector<std::int32_t> stable_per_patch;
+  FrameNodes<Scalar> nodes;
+  std::vector<detail::NodeRecord<Scalar>> records;
+  std::vector<std::uint32_t> band_end;
+  // Edge construction.
+  NeighborSearch search;
+  std::vector<Scalar> last_rr;
+  std::vector<std::int32_t> centres;
+  std::vector<std::uint64_t> next_centres;
+  detail::EdgeConstruction construction;
+  // Canonical CSR.
+  std::vector<std::int32_t> fill;
+  std::vector<std::uint64_t> by_target;
+  std::vector<std::uint8_t> slot_round;
+};
+
 template <typename Scalar = double, typename NeighborSearch = GridNeighborSearch<Scalar>>
 class GraphBuilder {
  public:
@@ -65,6 +143,7 @@ class GraphBuilder {
 #endif
   using Point = Eigen::Matrix<Scalar, 2, 1>;
   using Settings = GraphBuilderSettings<Scalar>;
+  using Workspace = GraphBuilderWorkspace<Scalar, NeighborSearch>;
 
   Settings settings;
   /// Configured prototype of the neighbour-search policy; copied by every build().
@@ -85,7 +164,20 @@ class GraphBuilder {
   Graph<Scalar> build(const ImageRegion<Scalar>& image, const Keypoints& keypoints, const OwnMask& own_dynamic_mask,
                       const PartnerMask& partner_dynamic_mask,
                       const std::vector<SemanticInstance<Scalar>>& instances) const {
-    return build_edges(image, build_nodes(image, keypoints, own_dynamic_mask, partner_dynamic_mask, instances));
+    Workspace workspace;
+    Graph<Scalar> graph;
+    build(image, keypoints, own_dynamic_mask, partner_dynamic_mask, instances, graph, workspace);
+    return graph;
+  }
+
+  /// The same construction into `out`, reusing its storage and the workspace's buffers: the
+  /// allocation-free form for hot loops. The result equals build()'s, bit for bit.
+  template <typename Keypoints, typename OwnMask, typename PartnerMask>
+  void build(const ImageRegion<Scalar>& image, const Keypoints& keypoints, const OwnMask& own_dynamic_mask,
+             const PartnerMask& partner_dynamic_mask, const std::vector<SemanticInstance<Scalar>>& instances,
+             Graph<Scalar>& out, Workspace& workspace) const {
+    select_nodes(image, keypoints, own_dynamic_mask, partner_dynamic_mask, instances, workspace);
+    connect_nodes(image, out, workspace);
   }
 
   /// Same as build() with no masks: every keypoint counts as stable.
@@ -101,6 +193,32 @@ class GraphBuilder {
   FrameNodes<Scalar> build_nodes(const ImageRegion<Scalar>& image, const Keypoints& keypoints,
                                  const OwnMask& own_dynamic_mask, const PartnerMask& partner_dynamic_mask,
                                  const std::vector<SemanticInstance<Scalar>>& instances) const {
+    Workspace workspace;
+    select_nodes(image, keypoints, own_dynamic_mask, partner_dynamic_mask, instances, workspace);
+    return std::move(workspace.nodes);
+  }
+
+  /// Edge construction over nodes already in canonical order (as build_nodes returns them).
+  Graph<Scalar> build_edges(const ImageRegion<Scalar>& image, FrameNodes<Scalar> nodes) const {
+    Workspace workspace;
+    workspace.nodes = std::move(nodes);
+    Graph<Scalar> graph;
+    connect_nodes(image, graph, workspace);
+    return graph;
+  }
+
+  /// R in pixels for an image region.
+  Scalar base_radius(const ImageRegion<Scalar>& image) const {
+    return settings.radius_fraction_of_diagonal * image.diagonal();
+  }
+
+ private:
+  /// Node selection into workspace.nodes: stable features, dense patches, semantic nodes,
+  /// canonical order, exact duplicates merged.
+  template <typename Keypoints, typename OwnMask, typename PartnerMask>
+  void select_nodes(const ImageRegion<Scalar>& image, const Keypoints& keypoints, const OwnMask& own_dynamic_mask,
+                    const PartnerMask& partner_dynamic_mask, const std::vector<SemanticInstance<Scalar>>& instances,
+                    Workspace& ws) const {
 #if CGE_HAS_CONCEPTS
     static_assert(Point2Like<std::decay_t<decltype(*std::begin(keypoints))>>,
                   "keypoints must be a range of points adapted by cge::traits::Point2 (cge/core/point_traits.hpp)");
@@ -116,9 +234,12 @@ class GraphBuilder {
     const bool partner_empty = traits::Mask<PartnerMask>::empty(partner_dynamic_mask);
 
     const int patch_count = settings.patch_cols * settings.patch_rows;
-    std::vector<std::int32_t> patch_of;  // per stable feature
-    std::vector<Point> stable;
-    std::vector<std::int32_t> stable_per_patch(static_cast<std::size_t>(patch_count), 0);
+    std::vector<std::int32_t>& patch_of = ws.patch_of;  // per stable feature
+    std::vector<Point>& stable = ws.stable;
+    std::vector<std::int32_t>& stable_per_patch = ws.stable_per_patch;
+    patch_of.clear();
+    stable.clear();
+    stable_per_patch.assign(static_cast<std::size_t>(patch_count), 0);
     const Scalar patch_w = image.width_px / static_cast<Scalar>(settings.patch_cols);
     const Scalar patch_h = image.height_px / static_cast<Scalar>(settings.patch_rows);
 
@@ -149,9 +270,9 @@ class GraphBuilder {
       ++stable_per_patch[static_cast<std::size_t>(patch)];
     }
 
-    FrameNodes<Scalar> nodes;
-    nodes.positions.reserve(stable.size() + instances.size() + 16);
-    nodes.kinds.reserve(nodes.positions.capacity());
+    FrameNodes<Scalar>& nodes = ws.nodes;
+    nodes.positions.clear();
+    nodes.kinds.clear();
     for (int patch = 0; patch < patch_count; ++patch) {
       if (stable_per_patch[static_cast<std::size_t>(patch)] > settings.dense_patch_threshold) {
         const int pc = patch % settings.patch_cols;
@@ -179,31 +300,24 @@ class GraphBuilder {
       nodes.positions.push_back(inst.centre_px);
       nodes.kinds.push_back(NodeKind::semantic);
     }
-    canonicalise(nodes, image);
-    return nodes;
+    canonicalise(image, ws);
   }
 
-  /// Edge construction over nodes already in canonical order (as build_nodes returns them).
-  Graph<Scalar> build_edges(const ImageRegion<Scalar>& image, FrameNodes<Scalar> nodes) const {
+  /// Edges over workspace.nodes (canonical order) into out.
+  void connect_nodes(const ImageRegion<Scalar>& image, Graph<Scalar>& out, Workspace& ws) const {
     validate(image);
-    const std::int32_t n = static_cast<std::int32_t>(nodes.positions.size());
-    if (nodes.kinds.size() != nodes.positions.size()) {
+    const std::int32_t n = static_cast<std::int32_t>(ws.nodes.positions.size());
+    if (ws.nodes.kinds.size() != ws.nodes.positions.size()) {
       throw std::invalid_argument("GraphBuilder: FrameNodes has different numbers of positions and kinds");
     }
-    Construction built(n);
+    ws.construction.reset(n);
     if (n >= 2) {
-      connect(image, nodes.positions, built);
-      join_strays(nodes.positions, built);
+      connect(image, ws.nodes.positions, ws);
+      join_strays(ws.nodes.positions, ws.construction);
     }
-    return to_graph(std::move(nodes), built);
+    to_graph(ws, out);
   }
 
-  /// R in pixels for an image region.
-  Scalar base_radius(const ImageRegion<Scalar>& image) const {
-    return settings.radius_fraction_of_diagonal * image.diagonal();
-  }
-
- private:
   void validate(const ImageRegion<Scalar>& image) const {
     image.validate();
     if (settings.patch_cols < 1 || settings.patch_rows < 1) {
@@ -226,11 +340,9 @@ class GraphBuilder {
   /// Sorts by (y, x, kind) and merges exact duplicates. A counting sort into horizontal bands
   /// (monotone in y) does most of the work without data-dependent branches; each band's few
   /// records are then sorted by the full key (insertion sort, or std::sort for a crowded band).
-  void canonicalise(FrameNodes<Scalar>& nodes, const ImageRegion<Scalar>& image) const {
-    struct Record {
-      Scalar y, x;
-      NodeKind kind;
-    };
+  static void canonicalise(const ImageRegion<Scalar>& image, Workspace& ws) {
+    using Record = detail::NodeRecord<Scalar>;
+    FrameNodes<Scalar>& nodes = ws.nodes;
     auto less = [](const Record& a, const Record& b) {
       if (a.y != b.y) return a.y < b.y;
       if (a.x != b.x) return a.x < b.x;
@@ -245,10 +357,11 @@ class GraphBuilder {
       const Scalar b = (y - image.origin_px.y()) * bands_per_px;  // in [0, bands] for validated nodes
       return std::min(static_cast<std::size_t>(b > 0 ? b : Scalar(0)), bands - 1);
     };
-    std::vector<std::uint32_t> end(bands + 1, 0);
+    std::vector<std::uint32_t>& end = ws.band_end;
+    end.assign(bands + 1, 0);
     for (std::size_t i = 0; i < n; ++i) ++end[band_of(nodes.positions[i].y()) + 1];
     for (std::size_t b = 0; b < bands; ++b) end[b + 1] += end[b];
-    std::vector<Record> records(n);
+    Record* records = detail::at_least(ws.records, n);
     for (std::size_t i = 0; i < n; ++i) {
       const Point& p = nodes.positions[i];
       records[end[band_of(p.y())]++] = Record{p.y(), p.x(), nodes.kinds[i]};
@@ -259,8 +372,7 @@ class GraphBuilder {
     for (std::size_t b = 0; b < bands; ++b) {
       const std::size_t last = end[b];
       if (last - first > kInsertionSortMax) {
-        std::sort(records.begin() + static_cast<std::ptrdiff_t>(first),
-                  records.begin() + static_cast<std::ptrdiff_t>(last), less);
+        std::sort(records + first, records + last, less);
       } else {
         for (std::size_t i = first + 1; i < last; ++i) {
           const Record item = records[i];
@@ -276,7 +388,8 @@ class GraphBuilder {
     }
     nodes.positions.clear();
     nodes.kinds.clear();
-    for (const Record& r : records) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const Record& r = records[i];
       const Point p(r.x, r.y);
       if (!nodes.positions.empty() && nodes.positions.back() == p) continue;  // exact duplicate
       nodes.positions.push_back(p);
@@ -284,50 +397,23 @@ class GraphBuilder {
     }
   }
 
-  /// Edges in creation order plus the per-node state of the construction.
-  struct Construction {
-    struct NewEdge {
-      std::int32_t u, v;  // u < v
-      std::uint8_t round;
-    };
-    // The first edge_count entries are valid. A plain array, not a vector: slots are written
-    // before they count (branch-free appends), and zero-filling ~100 kB per build is measurable.
-    std::unique_ptr<NewEdge[]> edges;
-    std::size_t capacity = 0;
-    std::size_t edge_count = 0;
-    std::vector<std::uint8_t> connected;  // the paper's flag: 1 once a node is in the graph
-    explicit Construction(std::int32_t n) : connected(static_cast<std::size_t>(n), 0) {
-      reserve_more(static_cast<std::size_t>(n) * 8);
-    }
-    /// Room for `more` edges past edge_count, so that appends need no capacity check.
-    void reserve_more(std::size_t more) {
-      if (capacity >= edge_count + more) return;
-      const std::size_t grown = std::max(capacity * 2, edge_count + more);
-      std::unique_ptr<NewEdge[]> bigger(new NewEdge[grown]);
-      std::copy(edges.get(), edges.get() + edge_count, bigger.get());
-      edges.swap(bigger);
-      capacity = grown;
-    }
-    void append(std::int32_t a, std::int32_t b, std::uint8_t round) {
-      reserve_more(1);
-      edges[edge_count++] = NewEdge{a, b, round};
-    }
-  };
-
   /// The round-based radius search (ALGORITHMS.md section 3).
   ///
   /// "Already joined" needs no adjacency lists: an edge is only ever made by one of its endpoints
   /// during its turn as a centre, and a centre leaves its turn joined to every node within the last
   /// radius it tried. So at c's turn, j is joined to c exactly when j has had its turn and c lies
   /// within j's last radius (the same squared-distance comparison, so the test is exact).
-  void connect(const ImageRegion<Scalar>& image, const std::vector<Point>& pts, Construction& out) const {
+  void connect(const ImageRegion<Scalar>& image, const std::vector<Point>& pts, Workspace& ws) const {
     const std::int32_t n = static_cast<std::int32_t>(pts.size());
     const Scalar radius = base_radius(image);
     const Scalar cap = settings.capped_radius_multiple * radius;
-    NeighborSearch search = neighbor_search;
+    detail::EdgeConstruction& out = ws.construction;
+    NeighborSearch& search = ws.search;
+    search = neighbor_search;  // the configured prototype; keeps the workspace's storage
     search.build(pts, radius);
     // Squared last radius of each node's turn; -1 until the node has had its turn.
-    std::vector<Scalar> last_rr(static_cast<std::size_t>(n), Scalar(-1));
+    std::vector<Scalar>& last_rr = ws.last_rr;
+    last_rr.assign(static_cast<std::size_t>(n), Scalar(-1));
 
     // Beyond this radius every node is reachable from any centre, so growing further is pointless.
     Point lo = pts[0], hi = pts[0];
@@ -352,8 +438,10 @@ class GraphBuilder {
 
     // Next round's centres as a node bitmap: reading it word by word gives them in canonical
     // (ascending) order without a sort.
-    std::vector<std::int32_t> centres{v0};
-    std::vector<std::uint64_t> next_centres((static_cast<std::size_t>(n) + 63) / 64, 0);
+    std::vector<std::int32_t>& centres = ws.centres;
+    centres.assign(1, v0);
+    std::vector<std::uint64_t>& next_centres = ws.next_centres;
+    next_centres.assign((static_cast<std::size_t>(n) + 63) / 64, 0);
     for (int round = 1; !centres.empty() && round <= settings.max_rounds; ++round) {
       const bool capped = round >= settings.first_capped_round;
       const std::uint8_t tag = static_cast<std::uint8_t>(std::min(round, 255));
@@ -369,7 +457,7 @@ class GraphBuilder {
           search.for_each_within(c, r, [&](std::int32_t j, Scalar d2) {
             const std::size_t sj = static_cast<std::size_t>(j);
             const bool fresh = !(d2 <= last_rr[sj]);  // not joined during j's turn
-            out.edges[out.edge_count] = typename Construction::NewEdge{c < j ? c : j, c < j ? j : c, tag};
+            out.edges[out.edge_count] = detail::EdgeConstruction::NewEdge{c < j ? c : j, c < j ? j : c, tag};
             out.edge_count += static_cast<std::size_t>(fresh);
             const bool first_join = fresh & (out.connected[sj] == 0);
             next_centres[sj >> 6] |= static_cast<std::uint64_t>(first_join) << (sj & 63);
@@ -394,7 +482,7 @@ class GraphBuilder {
 
   /// Joins never-connected nodes, nearest first, each to its nearest node already in the graph
   /// (ties: smaller distance, then lower stray index, then lower target index). Prim-like, exact.
-  static void join_strays(const std::vector<Point>& pts, Construction& out) {
+  static void join_strays(const std::vector<Point>& pts, detail::EdgeConstruction& out) {
     const std::int32_t n = static_cast<std::int32_t>(pts.size());
     std::vector<std::int32_t> strays;
     std::vector<std::int32_t> members;
@@ -435,12 +523,12 @@ class GraphBuilder {
   /// then appended to their source's row in ascending target order, so every CSR row comes out
   /// sorted; one sweep then emits the edges in (u, v) order. Both scatters use the same degree
   /// counts, as a node's number of incoming arcs equals its degree.
-  static Graph<Scalar> to_graph(FrameNodes<Scalar> nodes, const Construction& built) {
-    using NewEdge = typename Construction::NewEdge;
+  static void to_graph(Workspace& ws, Graph<Scalar>& g) {
+    using NewEdge = detail::EdgeConstruction::NewEdge;
+    FrameNodes<Scalar>& nodes = ws.nodes;
     const std::int32_t n = static_cast<std::int32_t>(nodes.positions.size());
-    const std::size_t m = built.edge_count;
-    const NewEdge* created = built.edges.get();
-    Graph<Scalar> g;
+    const std::size_t m = ws.construction.edge_count;
+    const NewEdge* created = ws.construction.edges.get();
     g.num_nodes_ = n;
     g.weighted_ = true;
     std::vector<std::int32_t>& offsets = g.offsets_;
@@ -453,8 +541,9 @@ class GraphBuilder {
       offsets[static_cast<std::size_t>(v) + 1] += offsets[static_cast<std::size_t>(v)];
 
     // Arcs bucketed by target: (source << 8) | round.
-    std::unique_ptr<std::uint64_t[]> by_target(new std::uint64_t[2 * m]);
-    std::vector<std::int32_t> fill(offsets.begin(), offsets.end() - 1);
+    std::uint64_t* by_target = detail::at_least(ws.by_target, 2 * m);
+    std::vector<std::int32_t>& fill = ws.fill;
+    fill.assign(offsets.begin(), offsets.end() - 1);
     for (std::size_t k = 0; k < m; ++k) {
       const NewEdge& e = created[k];
       by_target[static_cast<std::size_t>(fill[static_cast<std::size_t>(e.v)]++)] =
@@ -464,7 +553,7 @@ class GraphBuilder {
     }
     // Rows in ascending target order.
     g.adjacency_.resize(2 * m);
-    std::unique_ptr<std::uint8_t[]> slot_round(new std::uint8_t[2 * m]);
+    std::uint8_t* slot_round = detail::at_least(ws.slot_round, 2 * m);
     std::copy(offsets.begin(), offsets.end() - 1, fill.begin());
     for (std::int32_t target = 0; target < n; ++target) {
       for (std::int32_t k = offsets[static_cast<std::size_t>(target)];
@@ -476,6 +565,8 @@ class GraphBuilder {
       }
     }
     // Edges (u < v) in (u, v) order: the upper part of each sorted row.
+    g.edges_.clear();
+    g.edge_rounds_.clear();
     g.edges_.reserve(m);
     g.edge_rounds_.reserve(m);
     const std::vector<Point>& pts = nodes.positions;
@@ -488,9 +579,9 @@ class GraphBuilder {
         g.edge_rounds_.push_back(slot_round[static_cast<std::size_t>(k)]);
       }
     }
-    g.positions_ = std::move(nodes.positions);
-    g.kinds_ = std::move(nodes.kinds);
-    return g;
+    // Swap rather than move, so both the graph and the workspace keep storage for the next build.
+    g.positions_.swap(nodes.positions);
+    g.kinds_.swap(nodes.kinds);
   }
 };
 
