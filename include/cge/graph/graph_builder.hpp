@@ -4,7 +4,9 @@
 //
 // Determinism: the output depends only on the input values, never on their order (nodes are put
 // in canonical order first) nor on the neighbour-search policy. build() is const and re-entrant: it
-// works on a copy of the configured policy and keeps no state between calls.
+// works on a copy of the configured policy and keeps no state between calls. The allocation-free
+// form build(..., out, workspace) is re-entrant too as long as each thread has its own workspace
+// and output graph.
 
 #include <algorithm>
 #include <cmath>
