@@ -907,6 +907,14 @@ TEST_CASE("GraphBuilder rejects invalid input with a message naming the problem"
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
 
+  SECTION("nodes given to build_edges with kinds missing, or with a bad region") {
+    cge::FrameNodes<double> nodes;
+    nodes.positions = {P(10, 10), P(20, 20)};
+    nodes.kinds = {NodeKind::feature};
+    CHECK_THROWS_WITH(builder.build_edges(img, nodes), Catch::Contains("different numbers of positions and kinds"));
+    nodes.kinds.push_back(NodeKind::feature);
+    CHECK_THROWS_WITH(builder.build_edges(make_image(0, 80), nodes), Catch::Contains("width_px"));
+  }
   SECTION("keypoint outside the image") {
     const std::vector<P> kps{P(1, 1), P(50, 40), P(100.5, 10)};
     CHECK_THAT(invalid_argument_message([&] { builder.build(img, kps); }),

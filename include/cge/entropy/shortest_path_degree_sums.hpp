@@ -9,7 +9,8 @@
 //   M[u] = min_p (M[p] + |d(p) - d(u)|)             smallest degree sum over those paths
 // and Delta(s, k) sums, over the nodes u at distance k, S[u] (TieMode::all), S[u] / N[u]
 // (TieMode::mean) or M[u] (TieMode::min). All three depend only on the graph, never on node
-// numbering (up to floating-point rounding, as relabelling changes the summation order). N and S are kept in double: path counts grow exponentially on tie-rich graphs.
+// numbering (up to floating-point rounding, as relabelling changes the summation order).
+// N and S are kept in double: path counts grow exponentially on tie-rich graphs.
 // The sweep runs 64 sources at once, one bit per source (see BitParallelDegreeSums): the same
 // O(|V| |E|) arithmetic, but the BFS bookkeeping costs one word operation per 64 sources.
 

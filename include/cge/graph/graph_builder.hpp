@@ -202,6 +202,10 @@ class GraphBuilder {
 
   /// Edge construction over nodes already in canonical order (as build_nodes returns them).
   Graph<Scalar> build_edges(const ImageRegion<Scalar>& image, FrameNodes<Scalar> nodes) const {
+    validate(image);  // the other entry points validate in select_nodes
+    if (nodes.kinds.size() != nodes.positions.size()) {
+      throw std::invalid_argument("GraphBuilder: FrameNodes has different numbers of positions and kinds");
+    }
     Workspace workspace;
     workspace.nodes = std::move(nodes);
     Graph<Scalar> graph;
@@ -305,13 +309,9 @@ class GraphBuilder {
     canonicalise(image, ws);
   }
 
-  /// Edges over workspace.nodes (canonical order) into out.
+  /// Edges over workspace.nodes (canonical order, validated by the caller) into out.
   void connect_nodes(const ImageRegion<Scalar>& image, Graph<Scalar>& out, Workspace& ws) const {
-    validate(image);
     const std::int32_t n = static_cast<std::int32_t>(ws.nodes.positions.size());
-    if (ws.nodes.kinds.size() != ws.nodes.positions.size()) {
-      throw std::invalid_argument("GraphBuilder: FrameNodes has different numbers of positions and kinds");
-    }
     ws.construction.reset(n);
     if (n >= 2) {
       connect(image, ws.nodes.positions, ws);
