@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -57,6 +58,10 @@ CGE_INSTANTIATE_ALL(float)
 CGE_INSTANTIATE_ALL(double)
 template struct cge::CustomCoefficients<cge_test_instantiation::HalfPower>;
 template struct cge::CustomCoefficients<cge_test_instantiation::CoefficientFunction>;
+template class cge::DepthMADFilter<std::mt19937_64>;
+template class cge::DepthMADFilter<std::mt19937>;
+template struct cge::DynamicInstance<cge::BinaryMask>;
+template struct cge::DynamicInstance<cge::NoMask>;
 
 #undef CGE_INSTANTIATE_ALL
 
@@ -75,6 +80,7 @@ struct Run {
   S edge_entropy = 0;
   S similarity = 0;
   std::vector<double> exponents;
+  std::vector<cge::FeatureLabel> depth_mad_labels;
 
   Run() {
     const Point a(S(1), S(2));
@@ -182,6 +188,23 @@ struct Run {
     cge::CGESimilarity<S, cge::BruteForceNeighborSearch<S>> sim_brute;
     sim_brute.graph_builder.settings = settings;
     REQUIRE(sim_brute.score(image, cur, cand).similarity == score.similarity);
+
+    // Dynamic-feature elimination: keypoints of this scalar type, both engines.
+    cge::FloatDepthImage depth(640, 480, 3.0f);
+    for (int y = 100; y < 200; ++y)
+      for (int x = 100; x < 200; ++x) depth.at(x, y) = 1.0f + 0.001f * static_cast<float>(x + y - 200);
+    const std::vector<cge::DynamicInstance<cge::BinaryMask>> dynamic{
+        cge::dynamic_instance(mask, cge::PixelBox{90, 90, 130, 130}, 0)};
+    cge::DepthMADFilter<> mad;
+    mad.engine.seed(5);
+    const cge::DepthMADResult labelled = mad.filter(eigen_kps, depth, dynamic);
+    REQUIRE(labelled.labels.size() == eigen_kps.size());
+    REQUIRE(labelled.instances.at(0).mad_test_applied);
+    depth_mad_labels = labelled.labels;
+    cge::DepthMADFilter<std::mt19937> mad32(cge::DepthMADSettings{}, std::mt19937(5));
+    REQUIRE(mad32.filter(array_kps, depth, dynamic).labels.size() == array_kps.size());
+    const std::vector<cge::DynamicInstance<cge::NoMask>> none;
+    REQUIRE(mad.filter(pair_kps, depth, none).static_count == static_cast<int>(pair_kps.size()));
   }
 };
 
@@ -208,4 +231,5 @@ TEST_CASE("every template instantiates and runs for float and double alike", "[i
   REQUIRE(d.index_brute == d.index_grid);
   REQUIRE(f.edge_entropy == Approx(d.edge_entropy).epsilon(1e-6));
   REQUIRE(f.similarity == Approx(d.similarity).epsilon(1e-5));
+  REQUIRE(f.depth_mad_labels == d.depth_mad_labels);  // integer keypoints: the same pixels
 }
