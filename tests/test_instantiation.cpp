@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 
 #include "cge/cge.hpp"
+#include "cge/frontend/keyframe_policy.hpp"
 
 namespace cge_test_instantiation {
 /// A custom coefficient function with a name, for CustomCoefficients<F>.
@@ -232,4 +233,68 @@ TEST_CASE("every template instantiates and runs for float and double alike", "[i
   REQUIRE(f.edge_entropy == Approx(d.edge_entropy).epsilon(1e-6));
   REQUIRE(f.similarity == Approx(d.similarity).epsilon(1e-5));
   REQUIRE(f.depth_mad_labels == d.depth_mad_labels);  // integer keypoints: the same pixels
+}
+
+// Keyframe selection (cge/frontend): every class template for float and double, and one run of
+// each policy and free function template; float and double must take the same decisions on
+// integer-valued input.
+#define CGE_INSTANTIATE_KEYFRAME(S)                 \
+  template struct cge::PatchGrid<S>;                \
+  template struct cge::FrameSummary<S>;             \
+  template struct cge::KeyframeMeasures<S>;         \
+  template struct cge::KeyframeDecision<S>;         \
+  template struct cge::PatchKeyframeSettings<S>;    \
+  template class cge::PatchKeyframeSelector<S>;     \
+  template struct cge::OrbSlam2KeyframeSettings<S>; \
+  template class cge::OrbSlam2KeyframePolicy<S>;    \
+  template class cge::KeyframePolicy<S>;
+
+CGE_INSTANTIATE_KEYFRAME(float)
+CGE_INSTANTIATE_KEYFRAME(double)
+#undef CGE_INSTANTIATE_KEYFRAME
+
+namespace {
+
+/// Decisions (rule, keyframe id) of both policies on a fixed integer-valued sequence.
+template <typename S>
+std::vector<std::pair<int, std::int64_t>> keyframe_run() {
+  using Point = Eigen::Matrix<S, 2, 1>;
+  const cge::ImageRegion<S> image;
+  const cge::PatchGrid<S> grid = cge::PatchKeyframeSelector<S>().grid(image);
+  REQUIRE(cge::dense_patch_mean(grid, std::vector<int>(100, 0), 3) == Point(S(320), S(240)));
+  REQUIRE(cge::semantic_centroid(std::vector<Point>{Point(S(2), S(4))}).value() == Point(S(2), S(4)));
+  std::vector<std::pair<int, std::int64_t>> out;
+  cge::KeyframePolicy<S> patch(cge::KeyframePolicyKind::patch);
+  cge::KeyframePolicy<S> orb(cge::KeyframePolicyKind::orbslam2);
+  for (int t = 0; t < 60; ++t) {
+    std::vector<std::array<S, 2>> kps;
+    for (int i = 0; i < 400; ++i) {
+      kps.push_back({S((i * 37 + t * t * 3) % 640), S((i * 53 + (i * i) % 97 + t * 5) % 480)});
+    }
+    std::vector<cge::SemanticInstance<S>> instances(static_cast<std::size_t>(t % 7 < 4 ? 1 : 3));
+    for (auto& inst : instances) inst.centre_px = Point(S(100 + 4 * t), S(200));
+    const cge::FrameSummary<S> summary = cge::make_frame_summary<S>(t, grid, kps, instances, 60 + (t * 29) % 300);
+    REQUIRE(summary.patch_counts == cge::count_patch_features(grid, kps));
+    const cge::KeyframeDecision<S> a = patch.step(summary);
+    const cge::KeyframeDecision<S> b = orb.step(summary);
+    out.emplace_back(static_cast<int>(a.rule), a.keyframe_id);
+    out.emplace_back(static_cast<int>(b.rule), b.keyframe_id);
+  }
+  const cge::KeyframeDecision<S> last = patch.flush();
+  out.emplace_back(static_cast<int>(last.rule), last.keyframe_id);
+  patch.reset();
+  orb.reset();
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("keyframe policies instantiate and decide alike for float and double", "[instantiation][keyframe]") {
+  const auto f = keyframe_run<float>();
+  const auto d = keyframe_run<double>();
+  REQUIRE(f == d);
+  // Not vacuous: both policies inserted keyframes after the first frame.
+  int inserted = 0;
+  for (std::size_t i = 2; i < d.size(); ++i) inserted += d[i].second != cge::kNoFrame ? 1 : 0;
+  REQUIRE(inserted >= 4);
 }
