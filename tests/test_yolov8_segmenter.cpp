@@ -588,10 +588,10 @@ TEST_CASE("Yolov8Segmenter 640 on TUM fr3 walking_xyz: both people (skipped with
 
   const auto instances = segmenter.segment({image, kTumFrame});
   const auto matches = match_people(people, instances);
-  // Each Mask R-CNN person is matched by its own YOLOv8 person. The Mask R-CNN masks are dilated
-  // by about 10 px all round (98% of each YOLOv8 mask lies inside them; eroding them by 8 px raises
-  // the IoUs from 0.69 / 0.85 to 0.82 / 0.92), which caps the IoU of a tight mask: hence 0.65 and
-  // a containment check (docs/SEGMENTATION.md has the figures).
+  // Each Mask R-CNN person is matched by its own YOLOv8 person. On this frame the Mask R-CNN masks
+  // reach about 10 px beyond the people all round (98% and 99.99% of the YOLOv8 masks lie inside
+  // them; eroding them by 8 px raises the IoUs from 0.69 / 0.85 to 0.82 / 0.92), which caps the IoU
+  // of a tight mask: hence 0.65 rather than 0.7, plus a containment check (docs/SEGMENTATION.md).
   REQUIRE(matches.size() == 2);
   CHECK(matches[0].yolo_index >= 0);
   CHECK(matches[1].yolo_index >= 0);
