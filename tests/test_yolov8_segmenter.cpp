@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -518,6 +519,11 @@ TEST_CASE("Yolov8Segmenter: end to end on a tiny model with constant outputs", "
                segmenter.segment({cv::Mat(8, 8, CV_8UC4), "f4"});
              }),
              Catch::Contains("CV_8UC4"));
+
+  // Moving hands the network over; the moved-from object says so instead of crashing.
+  cge::Yolov8Segmenter moved = std::move(segmenter);
+  CHECK(moved.segment({image, "frame"}).empty());  // still the strict settings
+  CHECK_THROWS_AS(segmenter.segment({image, "frame"}), std::logic_error);
 }
 
 // ---- real data (../shared) ---------------------------------------------------------------------------

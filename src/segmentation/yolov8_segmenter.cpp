@@ -395,6 +395,7 @@ Yolov8Segmenter& Yolov8Segmenter::operator=(Yolov8Segmenter&&) noexcept = defaul
 
 std::vector<SegmentedInstance> Yolov8Segmenter::segment(const FrameImage& frame) {
   const std::string where = "Yolov8Segmenter: frame '" + frame.stem + "': ";
+  if (!network_) throw std::logic_error(where + "this segmenter was moved from and holds no network");
   if (frame.bgr.empty()) throw std::invalid_argument(where + "the image is empty");
   if (frame.bgr.type() != CV_8UC3) {
     throw std::invalid_argument(where + "the image is " + cv::typeToString(frame.bgr.type()) +

@@ -81,7 +81,8 @@ cv::Mat letterbox_image(const cv::Mat& image, const Letterbox& letterbox, int pa
 std::vector<SegmentedInstance> decode_yolov8_seg(const cv::Mat& predictions, const cv::Mat& prototypes,
                                                  const Letterbox& letterbox, const Yolov8Settings& settings);
 
-/// YOLOv8-seg through OpenCV's DNN module. Not copyable (it owns the network); movable.
+/// YOLOv8-seg through OpenCV's DNN module. Not copyable (it owns the network); movable (a
+/// moved-from segmenter throws std::logic_error from segment()).
 class Yolov8Segmenter final : public InstanceSegmenter {
  public:
   /// Loads the ONNX model, reads its fixed input size from the file, runs one forward pass on a
