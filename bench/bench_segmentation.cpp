@@ -46,7 +46,7 @@ void BM_Yolov8Segment(benchmark::State& state) {
   }
   state.counters["instances"] = static_cast<double>(instances);
 }
-BENCHMARK(BM_Yolov8Segment)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_Yolov8Segment)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->MinTime(2.0)->MeasureProcessCPUTime();
 
 // ---- decode_yolov8_seg alone, on the outputs of the same frame ------------------------------------------
 
