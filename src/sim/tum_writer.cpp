@@ -79,7 +79,10 @@ std::vector<std::uint8_t> encode_png(const cv::Mat& image, int compression, cons
   std::vector<std::uint8_t> bytes;
   bool ok = false;
   try {
-    ok = cv::imencode(kPngExtension, image, bytes, {cv::IMWRITE_PNG_COMPRESSION, compression});
+    // Without a compression parameter OpenCV takes its speed path (zlib level 1, RLE, SUB filter).
+    const std::vector<int> params =
+        compression == kPngFast ? std::vector<int>{} : std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, compression};
+    ok = cv::imencode(kPngExtension, image, bytes, params);
   } catch (const cv::Exception& e) {
     throw std::runtime_error(std::string("cannot encode the ") + what + " image as PNG: " + e.what());
   }
@@ -274,8 +277,8 @@ void check_sequence(const FrameSource& source) {
 // ---- encoding and writing -----------------------------------------------------------------------
 
 EncodedFrame encode_frame(const RenderedFrame& frame, const SegmentationResult& segmentation, int png_compression) {
-  if (png_compression < 0 || png_compression > kMaxPngCompression) {
-    throw std::invalid_argument("PNG compression level " + std::to_string(png_compression) + " is not in 0 .. 9");
+  if (png_compression < kPngFast || png_compression > kMaxPngCompression) {
+    throw std::invalid_argument("PNG compression level " + std::to_string(png_compression) + " is not in -1 .. 9");
   }
   EncodedFrame e;
   e.rgb = encode_png(frame.rgb, png_compression, "rgb");
@@ -292,9 +295,9 @@ TumSequenceWriter::TumSequenceWriter(fs::path out_dir, const PinholeCamera& came
       frame_rate_hz_(frame_rate_hz),
       scene_instances_(sorted_by_id(std::move(scene_instances))),
       settings_(std::move(settings)) {
-  if (settings_.png_compression < 0 || settings_.png_compression > kMaxPngCompression) {
+  if (settings_.png_compression < kPngFast || settings_.png_compression > kMaxPngCompression) {
     throw std::invalid_argument("TumWriterSettings::png_compression " + std::to_string(settings_.png_compression) +
-                                " is not in 0 .. 9");
+                                " is not in -1 .. 9");
   }
   if (settings_.description.find_first_of("\r\n") != std::string::npos) {
     throw std::invalid_argument("TumWriterSettings::description must be one line");

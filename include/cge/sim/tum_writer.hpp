@@ -34,10 +34,15 @@
 namespace cge {
 namespace sim {
 
+/// TumWriterSettings::png_compression value that selects OpenCV's fast PNG path.
+inline constexpr int kPngFast = -1;
+
 struct TumWriterSettings {
-  /// zlib level of every PNG, 0 (none, largest files) .. 9 (smallest, slowest). 1 is about twice as
-  /// fast as OpenCV's default 3 on rendered frames and costs ~10% in size (docs/SIMULATION_IO.md).
-  int png_compression = 1;
+  /// PNG compression of every image. kPngFast (-1): OpenCV's speed path (zlib level 1, RLE
+  /// matching, the SUB row filter), the fastest by far on rendered frames; 0 .. 9: that zlib level
+  /// with libpng's adaptive row filters, 2-3 times slower for files 0-10% smaller
+  /// (docs/SIMULATION_IO.md has the measurements).
+  int png_compression = kPngFast;
   /// Write into an existing non-empty folder (overwriting this writer's own files, deleting nothing).
   bool force = false;
   /// Written into the "# file:" header line of rgb.txt, depth.txt and groundtruth.txt, where TUM
@@ -103,7 +108,8 @@ void write_tum_sequence(const FrameSource& source, const SegmentationErrorModel&
                         const std::filesystem::path& out_dir, const TumWriterSettings& settings = {},
                         const WriteProgress& progress = {});
 
-/// Encodes one frame's images as PNG (no disk access; for tests and benchmarks).
+/// Encodes one frame's images as PNG (no disk access; for tests and benchmarks); png_compression
+/// as TumWriterSettings::png_compression.
 EncodedFrame encode_frame(const RenderedFrame& frame, const SegmentationResult& segmentation, int png_compression);
 
 /// Throws std::invalid_argument when out_dir exists and is not an empty directory (and !force, for
