@@ -737,3 +737,28 @@ TEST_CASE("TUM writer: bad frames are refused with the frame named", "[sim][tum_
       cge_test::invalid_argument_message([&] { cge::sim::write_tum_sequence(seq, model, tmp.path() / "label", {}); }),
       Catch::Contains("label 4 at pixel (0, 0)"));
 }
+
+namespace {
+/// A type with the renderer's announced members (cge/sim/renderer.hpp), to check the adapter.
+struct FakeRenderer {
+  cge::sim::InMemoryFrameSource frames = small_sequence(3);
+  int frame_count() const { return frames.frame_count(); }
+  const cge::sim::PinholeCamera& camera() const { return frames.camera(); }
+  double frame_rate_hz() const { return frames.frame_rate_hz(); }
+  const std::vector<InstanceInfo>& instances() const { return frames.instances(); }
+  const std::vector<cge::sim::LoopPair>& loops() const { return frames.loops(); }
+  cge::sim::RenderedFrame render(int index) const { return frames.render(index); }
+};
+}  // namespace
+
+TEST_CASE("RendererFrameSource: a renderer-like type written like any other source", "[sim][tum_writer]") {
+  const cge::sim::RendererFrameSource<FakeRenderer> source{FakeRenderer{}};
+  CHECK(source.frame_count() == 3);
+  CHECK(source.camera().width_px == 64);
+  CHECK(source.render(2).index == 2);
+  TempDir tmp;
+  SegmentationErrorModel model(source.instances(), 3, noisy_settings());
+  cge::sim::write_tum_sequence(source, model, tmp.path() / "a", {});
+  cge::sim::write_tum_sequence(source.renderer().frames, model, tmp.path() / "b", {});
+  CHECK(tree(tmp.path() / "a") == tree(tmp.path() / "b"));
+}

@@ -29,22 +29,22 @@ class FrameSource {
   virtual RenderedFrame render(int index) const = 0;
 };
 
-/// Any type with the members above (the renderer, cge/sim/renderer.hpp) seen as a FrameSource,
-/// without copying it: `RendererFrameSource<SequenceRenderer> source(renderer);`. The renderer
-/// must outlive the adapter.
+/// Any type with the members above (the renderer, cge/sim/renderer.hpp) as a FrameSource. The
+/// adapter owns the renderer: `RendererFrameSource<SequenceRenderer> source(SequenceRenderer(spec));`.
 template <typename Renderer>
 class RendererFrameSource final : public FrameSource {
  public:
-  explicit RendererFrameSource(const Renderer& renderer) : renderer_(renderer) {}
+  explicit RendererFrameSource(Renderer renderer) : renderer_(std::move(renderer)) {}
   int frame_count() const override { return renderer_.frame_count(); }
   const PinholeCamera& camera() const override { return renderer_.camera(); }
   double frame_rate_hz() const override { return renderer_.frame_rate_hz(); }
   const std::vector<InstanceInfo>& instances() const override { return renderer_.instances(); }
   const std::vector<LoopPair>& loops() const override { return renderer_.loops(); }
   RenderedFrame render(int index) const override { return renderer_.render(index); }
+  const Renderer& renderer() const { return renderer_; }
 
  private:
-  const Renderer& renderer_;
+  Renderer renderer_;
 };
 
 /// Frames held in memory (made by hand in a test, or rendered earlier). render() returns a deep
