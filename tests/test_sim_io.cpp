@@ -762,3 +762,17 @@ TEST_CASE("RendererFrameSource: a renderer-like type written like any other sour
   cge::sim::write_tum_sequence(source.renderer().frames, model, tmp.path() / "b", {});
   CHECK(tree(tmp.path() / "a") == tree(tmp.path() / "b"));
 }
+
+TEST_CASE("simulate_frame: a frame and its segmentation in memory", "[sim][tum_writer]") {
+  auto seq = small_sequence(4);
+  SegmentationErrorModel model(seq.instances(), 8, noisy_settings());
+  for (int i = 0; i < 4; ++i) {
+    const cge::sim::SimulatedFrame s = cge::sim::simulate_frame(seq, model, i);
+    CHECK(s.frame.index == i);
+    CHECK(equal_images(s.frame.rgb, seq.frames[static_cast<std::size_t>(i)].rgb));
+    CHECK(equal_images(s.segmentation.instance_labels, model.apply(s.frame.instance_labels, i).instance_labels));
+  }
+  seq.frames[2].index = 3;
+  CHECK_THAT(cge_test::invalid_argument_message([&] { cge::sim::simulate_frame(seq, model, 2); }),
+             Catch::Contains("returned frame 3 for index 2"));
+}

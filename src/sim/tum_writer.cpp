@@ -249,7 +249,7 @@ void check_output_folder(const fs::path& out_dir, bool force) {
   }
 }
 
-void check_sequence(const FrameSource& source) {
+void check_sequence(const FrameSource& source, const SegmentationErrorModel& model) {
   if (source.frame_count() < 1) {
     throw std::invalid_argument("the sequence has " + std::to_string(source.frame_count()) +
                                 " frames; it needs at least one");
@@ -272,6 +272,26 @@ void check_sequence(const FrameSource& source) {
                                   std::to_string(source.frame_count()));
     }
   }
+  validate(model.settings);
+  const std::vector<InstanceInfo> table = sorted_by_id(source.instances());
+  if (table.size() != model.scene_instances().size() ||
+      !std::equal(table.begin(), table.end(), model.scene_instances().begin(), same_instance)) {
+    throw std::invalid_argument("the segmentation error model was made for a different instance table");
+  }
+  if (model.settings.false_positive_probability > 0) {
+    model.false_positive_id(source.frame_count() - 1);  // throws when the ids run out
+  }
+}
+
+SimulatedFrame simulate_frame(const FrameSource& source, const SegmentationErrorModel& model, int index) {
+  SimulatedFrame s;
+  s.frame = source.render(index);
+  if (s.frame.index != index) {
+    throw std::invalid_argument("the frame source returned frame " + std::to_string(s.frame.index) + " for index " +
+                                std::to_string(index));
+  }
+  s.segmentation = model.apply(s.frame.instance_labels, index);
+  return s;
 }
 
 // ---- encoding and writing -----------------------------------------------------------------------
@@ -424,24 +444,12 @@ void TumSequenceWriter::finish(const std::vector<LoopPair>& loops) {
 
 void write_tum_sequence(const FrameSource& source, const SegmentationErrorModel& model, const fs::path& out_dir,
                         const TumWriterSettings& settings, const WriteProgress& progress) {
-  check_sequence(source);
-  validate(model.settings);
+  check_sequence(source, model);
   const int n = source.frame_count();
-  if (sorted_by_id(source.instances()).size() != model.scene_instances().size() ||
-      !std::equal(model.scene_instances().begin(), model.scene_instances().end(),
-                  sorted_by_id(source.instances()).begin(), same_instance)) {
-    throw std::invalid_argument("the segmentation error model was made for a different instance table");
-  }
-  if (model.settings.false_positive_probability > 0) model.false_positive_id(n - 1);  // throws when ids run out
-
   TumSequenceWriter writer(out_dir, source.camera(), source.frame_rate_hz(), source.instances(), settings);
   for (int i = 0; i < n; ++i) {
-    const RenderedFrame frame = source.render(i);
-    if (frame.index != i) {
-      throw std::invalid_argument("frame source returned frame " + std::to_string(frame.index) + " for index " +
-                                  std::to_string(i));
-    }
-    writer.write_frame(frame, model.apply(frame.instance_labels, i));
+    const SimulatedFrame s = simulate_frame(source, model, i);
+    writer.write_frame(s.frame, s.segmentation);
     if (progress) progress(i + 1, n);
   }
   writer.finish(source.loops());

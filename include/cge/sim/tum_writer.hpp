@@ -116,9 +116,20 @@ EncodedFrame encode_frame(const RenderedFrame& frame, const SegmentationResult& 
 /// a non-empty directory); the message names the folder. Touches nothing.
 void check_output_folder(const std::filesystem::path& out_dir, bool force);
 
-/// Checks the parts of a sequence that do not depend on the frames: at least one frame, a finite
-/// positive camera, a valid instance table, loops inside the sequence with match < query.
-void check_sequence(const FrameSource& source);
+/// Checks what does not depend on the frames' pixels: at least one frame, a finite positive
+/// camera and frame rate, a valid instance table that the model was made for, loops inside the
+/// sequence with match < query, and false-positive ids for every frame (when enabled).
+void check_sequence(const FrameSource& source, const SegmentationErrorModel& model);
+
+/// One frame rendered and passed through the error model, in memory (no disk access).
+struct SimulatedFrame {
+  RenderedFrame frame;
+  SegmentationResult segmentation;
+};
+
+/// Frame `index` of `source` with its segmentation by `model`; throws std::invalid_argument when
+/// the source returns a frame with another index.
+SimulatedFrame simulate_frame(const FrameSource& source, const SegmentationErrorModel& model, int index);
 
 // ---- the text formats, exposed for readers and tests ----
 
