@@ -160,6 +160,7 @@ void write_overlapped(const cge::sim::FrameSource& source, const cge::sim::Segme
 
 int run(Options opt) {
   if (opt.frames < 1) throw UsageError("--frames must be at least 1, got " + std::to_string(opt.frames));
+  if (opt.out.empty()) throw UsageError("--out must name a folder");
   if (opt.exact_masks) {
     opt.errors = cge::sim::exact_segmentation();
   } else {

@@ -40,8 +40,8 @@ inline constexpr int kPngFast = -1;
 struct TumWriterSettings {
   /// PNG compression of every image. kPngFast (-1): OpenCV's speed path (zlib level 1, RLE
   /// matching, the SUB row filter), the fastest by far on rendered frames; 0 .. 9: that zlib level
-  /// with libpng's adaptive row filters, 2-3 times slower for files 0-10% smaller
-  /// (docs/SIMULATION_IO.md has the measurements).
+  /// with libpng's adaptive row filters, about 3 times slower for files ~5% smaller (level 0:
+  /// slower and 2.3 times larger). Measurements in docs/SIMULATION_IO.md.
   int png_compression = kPngFast;
   /// Write into an existing non-empty folder (overwriting this writer's own files, deleting nothing).
   bool force = false;
