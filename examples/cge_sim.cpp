@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <deque>
 #include <exception>
 #include <future>
 #include <memory>
@@ -44,6 +45,9 @@ constexpr int kExitFailure = 1;
 constexpr int kExitUsage = 2;
 constexpr const char* kProgram = "cge_sim";
 constexpr int kProgressBarWidth = 40;  // characters between the brackets
+// Frames encoded at the same time while the next one renders: two keep two cores busy when the
+// renderer takes less time than an encoding; each frame in flight holds ~3 MB.
+constexpr int kFramesInFlight = 2;
 
 bool progress_line_open = false;  // a progress bar is on the terminal without its newline yet
 
@@ -133,28 +137,40 @@ void draw_progress(int done, int total, double elapsed_s) {
   std::fflush(stderr);
 }
 
-/// cge::sim::write_tum_sequence with the writing of frame i (PNG encoding, the disk) on a second
-/// thread while this one renders frame i + 1. One thread writes, in frame order, so the files are
-/// the same bytes as the sequential writer's; only the wall time differs (rendering and encoding
-/// each take about half of a frame's time). The library itself stays single-threaded.
+/// cge::sim::write_tum_sequence with the PNG encoding, most of a frame's time, on other threads:
+/// this thread renders frame i while up to kFramesInFlight earlier frames are being encoded, and
+/// commits each frame (checks, files) in frame order once its encoding is done. Encoding is a
+/// pure function of the frame and the files are written in order by this thread alone, so the
+/// bytes are those of the sequential writer; only the wall time differs. The library itself
+/// starts no threads.
 void write_overlapped(const cge::sim::FrameSource& source, const cge::sim::SegmentationErrorModel& model,
                       const std::string& out, const cge::sim::TumWriterSettings& settings,
                       const cge::sim::WriteProgress& progress) {
+  struct InFlight {
+    std::shared_ptr<const cge::sim::SimulatedFrame> frame;
+    std::future<cge::sim::EncodedFrame> encoded;
+  };
   cge::sim::check_sequence(source, model);
   const int n = source.frame_count();
+  const int level = settings.png_compression;
   cge::sim::TumSequenceWriter writer(out, source.camera(), source.frame_rate_hz(), source.instances(), settings);
-  std::future<void> writing;  // declared after the writer: waited for before the writer goes
+  std::deque<InFlight> in_flight;  // after the writer: its futures are waited for first
+  int committed = 0;
+  const auto commit_oldest = [&] {
+    InFlight& oldest = in_flight.front();
+    writer.write_frame(oldest.frame->frame, oldest.frame->segmentation, oldest.encoded.get());
+    in_flight.pop_front();
+    if (progress) progress(++committed, n);
+  };
   for (int i = 0; i < n; ++i) {
-    cge::sim::SimulatedFrame frame = cge::sim::simulate_frame(source, model, i);
-    if (writing.valid()) {
-      writing.get();  // rethrows the writer's error
-      if (progress) progress(i, n);
-    }
-    writing = std::async(std::launch::async,
-                         [&writer, f = std::move(frame)] { writer.write_frame(f.frame, f.segmentation); });
+    auto frame = std::make_shared<const cge::sim::SimulatedFrame>(cge::sim::simulate_frame(source, model, i));
+    std::future<cge::sim::EncodedFrame> encoded = std::async(std::launch::async, [frame, level] {
+      return cge::sim::encode_frame(frame->frame, frame->segmentation, level);
+    });
+    in_flight.push_back({std::move(frame), std::move(encoded)});
+    if (static_cast<int>(in_flight.size()) > kFramesInFlight) commit_oldest();
   }
-  writing.get();
-  if (progress) progress(n, n);
+  while (!in_flight.empty()) commit_oldest();
   writer.finish(source.loops());
 }
 

@@ -776,3 +776,22 @@ TEST_CASE("simulate_frame: a frame and its segmentation in memory", "[sim][tum_w
   CHECK_THAT(cge_test::invalid_argument_message([&] { cge::sim::simulate_frame(seq, model, 2); }),
              Catch::Contains("returned frame 3 for index 2"));
 }
+
+TEST_CASE("TumSequenceWriter: frames encoded by the caller give the same files", "[sim][tum_writer]") {
+  const auto seq = small_sequence(4);
+  SegmentationErrorModel model(seq.instances(), 21, noisy_settings());
+  TempDir tmp;
+  cge::sim::write_tum_sequence(seq, model, tmp.path() / "a", {});
+  cge::sim::check_sequence(seq, model);
+  cge::sim::TumSequenceWriter writer(tmp.path() / "b", seq.camera(), seq.frame_rate_hz(), seq.instances());
+  for (int i = 0; i < 4; ++i) {
+    const auto s = cge::sim::simulate_frame(seq, model, i);
+    writer.write_frame(s.frame, s.segmentation,
+                       cge::sim::encode_frame(s.frame, s.segmentation, writer.settings().png_compression));
+  }
+  writer.finish(seq.loops());
+  CHECK(tree(tmp.path() / "a") == tree(tmp.path() / "b"));
+  const auto s = cge::sim::simulate_frame(seq, model, 0);
+  CHECK_THAT(cge_test::invalid_argument_message([&] { writer.write_frame(s.frame, s.segmentation, {}); }),
+             Catch::Contains("encoded image is empty"));
+}

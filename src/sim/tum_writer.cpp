@@ -328,6 +328,19 @@ TumSequenceWriter::TumSequenceWriter(fs::path out_dir, const PinholeCamera& came
 }
 
 void TumSequenceWriter::write_frame(const RenderedFrame& frame, const SegmentationResult& segmentation) {
+  write_checked(frame, segmentation, nullptr);
+}
+
+void TumSequenceWriter::write_frame(const RenderedFrame& frame, const SegmentationResult& segmentation,
+                                    const EncodedFrame& encoded) {
+  if (encoded.rgb.empty() || encoded.depth.empty() || encoded.mask.empty() || encoded.segmentation.empty()) {
+    throw std::invalid_argument("frame " + std::to_string(frame.index) + ": an encoded image is empty");
+  }
+  write_checked(frame, segmentation, &encoded);
+}
+
+void TumSequenceWriter::write_checked(const RenderedFrame& frame, const SegmentationResult& segmentation,
+                                      const EncodedFrame* encoded) {
   if (finished_) throw std::logic_error("TumSequenceWriter::write_frame after finish()");
   const int n = frame.index;
   require_image(frame.rgb, CV_8UC3, camera_, "rgb", n);
@@ -379,12 +392,13 @@ void TumSequenceWriter::write_frame(const RenderedFrame& frame, const Segmentati
   }
   require_known_labels(segmentation.instance_labels, known, "segmentation", n);
 
-  const EncodedFrame encoded = encode_frame(frame, segmentation, settings_.png_compression);
+  const EncodedFrame own = encoded ? EncodedFrame{} : encode_frame(frame, segmentation, settings_.png_compression);
+  const EncodedFrame& bytes = encoded ? *encoded : own;
   const std::string file = stem + kPngExtension;
-  write_file(out_dir_ / kRgbDir / file, encoded.rgb);
-  write_file(out_dir_ / kDepthDir / file, encoded.depth);
-  write_file(out_dir_ / kMaskDir / file, encoded.mask);
-  write_file(out_dir_ / kSegmentationDir / file, encoded.segmentation);
+  write_file(out_dir_ / kRgbDir / file, bytes.rgb);
+  write_file(out_dir_ / kDepthDir / file, bytes.depth);
+  write_file(out_dir_ / kMaskDir / file, bytes.mask);
+  write_file(out_dir_ / kSegmentationDir / file, bytes.segmentation);
 
   timestamps_.push_back(frame.timestamp_s);
   stems_.push_back(stem);

@@ -83,13 +83,22 @@ class TumSequenceWriter {
 
   void write_frame(const RenderedFrame& frame, const SegmentationResult& segmentation);
 
+  /// The same with the PNGs encoded by the caller, which must pass
+  /// encode_frame(frame, segmentation, settings().png_compression): encoding is most of a frame's
+  /// time and is a pure function, so a caller may run it on other threads and commit frames here in
+  /// order (cge_sim does). The frame is checked as by the other overload; the bytes are not.
+  void write_frame(const RenderedFrame& frame, const SegmentationResult& segmentation, const EncodedFrame& encoded);
+
   /// loops: ground-truth loop pairs, frame indices of the frames written (in write order).
   void finish(const std::vector<LoopPair>& loops);
 
   const std::filesystem::path& out_dir() const { return out_dir_; }
   int frames_written() const { return static_cast<int>(timestamps_.size()); }
+  const TumWriterSettings& settings() const { return settings_; }
 
  private:
+  void write_checked(const RenderedFrame& frame, const SegmentationResult& segmentation, const EncodedFrame* encoded);
+
   std::filesystem::path out_dir_;
   PinholeCamera camera_;
   double frame_rate_hz_;
