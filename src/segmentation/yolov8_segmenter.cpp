@@ -200,6 +200,70 @@ void decode_mask(const Candidate& c, const float* coefficients, std::ptrdiff_t c
   }
 }
 
+// The retina mask: the logit map sum_k c_k P_k on the whole prototype grid (no crop there),
+// sampled bilinearly at the centre of every original pixel inside the box, the grid's edge values
+// extended beyond it (as a bilinear resize without corner alignment does), then sigmoid and
+// threshold. `logits` is a rows x cols work grid; only the cells the box's pixels read are written.
+void decode_mask_retina(const float* coefficients, std::ptrdiff_t coefficient_step, const cv::Mat& prototypes,
+                        const Letterbox& lb, const cv::Rect& box_pixels, const Yolov8Settings& settings,
+                        cv::Mat& logits, cv::Mat& mask) {
+  const int rows = prototypes.size[2];
+  const int cols = prototypes.size[3];
+  const double cells_per_input_x = static_cast<double>(cols) / lb.input_size.width;
+  const double cells_per_input_y = static_cast<double>(rows) / lb.input_size.height;
+
+  // Where each original pixel centre falls on the cell grid: the two neighbouring cells (equal at
+  // the grid's edge) and the weight of the second.
+  struct Tap {
+    int first, second;
+    float weight;
+  };
+  const auto taps = [](int first, int count, double scale, int pad, double cells_per_input, int cells) {
+    std::vector<Tap> t(static_cast<std::size_t>(count));
+    const double last = cells - 1;
+    for (int i = 0; i < count; ++i) {
+      const double input = (first + i + kPixelCentre) * scale + pad;
+      const double cell = std::clamp(input * cells_per_input - kPixelCentre, 0.0, last);
+      const double left = std::floor(cell);
+      const int index = static_cast<int>(left);
+      t[static_cast<std::size_t>(i)] = {index, std::min(index + 1, cells - 1), static_cast<float>(cell - left)};
+    }
+    return t;
+  };
+  const auto tx = taps(box_pixels.x, box_pixels.width, lb.scale_x(), lb.pad_left_px, cells_per_input_x, cols);
+  const auto ty = taps(box_pixels.y, box_pixels.height, lb.scale_y(), lb.pad_top_px, cells_per_input_y, rows);
+  // Taps are monotonic: the cells read span the first tap's first cell to the last tap's second.
+  const int c0 = tx.front().first, c1 = tx.back().second + 1;
+  const int r0 = ty.front().first, r1 = ty.back().second + 1;
+
+  const std::ptrdiff_t plane = static_cast<std::ptrdiff_t>(rows) * cols;
+  const float* proto = prototypes.ptr<float>();
+  for (int r = r0; r < r1; ++r) std::fill(logits.ptr<float>(r) + c0, logits.ptr<float>(r) + c1, 0.0f);
+  for (int k = 0; k < kYolov8MaskCoefficients; ++k) {
+    const float w = coefficients[k * coefficient_step];
+    const float* proto_k = proto + k * plane;
+    for (int r = r0; r < r1; ++r) {
+      float* out = logits.ptr<float>(r);
+      const float* in = proto_k + static_cast<std::ptrdiff_t>(r) * cols;
+      for (int col = c0; col < c1; ++col) out[col] += w * in[col];
+    }
+  }
+
+  for (int j = 0; j < box_pixels.height; ++j) {
+    const Tap& y = ty[static_cast<std::size_t>(j)];
+    const float* top = logits.ptr<float>(y.first);
+    const float* bottom = logits.ptr<float>(y.second);
+    unsigned char* out = mask.ptr<unsigned char>(box_pixels.y + j) + box_pixels.x;
+    for (int i = 0; i < box_pixels.width; ++i) {
+      const Tap& x = tx[static_cast<std::size_t>(i)];
+      const float upper = top[x.first] + x.weight * (top[x.second] - top[x.first]);
+      const float lower = bottom[x.first] + x.weight * (bottom[x.second] - bottom[x.first]);
+      const float logit = upper + y.weight * (lower - upper);
+      out[i] = 1.0f / (1.0f + std::exp(-logit)) > settings.mask_threshold ? kMaskOn : 0;
+    }
+  }
+}
+
 std::vector<unsigned char> read_file(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -244,6 +308,16 @@ cv::Size model_input_size(const detail::OnnxGraphInfo& info, const std::string& 
 
 }  // namespace
 
+const char* to_string(Yolov8MaskDecoding decoding) {
+  switch (decoding) {
+    case Yolov8MaskDecoding::prototype_crop:
+      return "prototype_crop";
+    case Yolov8MaskDecoding::retina:
+      return "retina";
+  }
+  return "invalid";  // only for a value cast from an out-of-range integer
+}
+
 void check_settings(const Yolov8Settings& s) {
   const auto fail = [](const std::string& what) { throw std::invalid_argument("Yolov8Settings: " + what); };
   if (!(s.confidence_threshold > 0 && s.confidence_threshold <= 1)) {
@@ -254,6 +328,9 @@ void check_settings(const Yolov8Settings& s) {
   }
   if (!(s.mask_threshold > 0 && s.mask_threshold < 1)) {
     fail("mask_threshold " + std::to_string(s.mask_threshold) + " is not in (0, 1)");
+  }
+  if (s.mask_decoding != Yolov8MaskDecoding::prototype_crop && s.mask_decoding != Yolov8MaskDecoding::retina) {
+    fail("mask_decoding " + std::to_string(static_cast<int>(s.mask_decoding)) + " is not a Yolov8MaskDecoding");
   }
   if (s.max_detections < 1) fail("max_detections " + std::to_string(s.max_detections) + " is not >= 1");
   if (s.pad_value < 0 || s.pad_value > kMaxPadValue)
@@ -316,7 +393,10 @@ std::vector<SegmentedInstance> decode_yolov8_seg(const cv::Mat& predictions, con
   const int anchors = predictions.size[2];
   const float* first_coefficient =
       predictions.ptr<float>() + static_cast<std::ptrdiff_t>(kYolov8BoxValues + kCocoClassCount) * anchors;
-  cv::Mat probability(prototypes.size[2] + 2, prototypes.size[3] + 2, CV_32F, cv::Scalar(0));
+  const bool retina = settings.mask_decoding == Yolov8MaskDecoding::retina;
+  // Work grids: a zero-bordered probability grid (prototype_crop) or a logit grid (retina).
+  cv::Mat probability = retina ? cv::Mat(prototypes.size[2], prototypes.size[3], CV_32F)
+                               : cv::Mat(prototypes.size[2] + 2, prototypes.size[3] + 2, CV_32F, cv::Scalar(0));
   const double sx = lb.scale_x(), sy = lb.scale_y();
   const double width = lb.image_size.width, height = lb.image_size.height;
 
@@ -341,8 +421,14 @@ std::vector<SegmentedInstance> decode_yolov8_seg(const cv::Mat& predictions, con
     const int u0 = first_centre_at_or_after(x1), u1 = first_centre_at_or_after(x2);
     const int v0 = first_centre_at_or_after(y1), v1 = first_centre_at_or_after(y2);
     if (u1 > u0 && v1 > v0) {
-      decode_mask(c, first_coefficient + c.anchor, anchors, prototypes, lb, cv::Rect(u0, v0, u1 - u0, v1 - v0),
-                  settings, probability, instance.mask);
+      const cv::Rect box_pixels(u0, v0, u1 - u0, v1 - v0);
+      if (retina) {
+        decode_mask_retina(first_coefficient + c.anchor, anchors, prototypes, lb, box_pixels, settings, probability,
+                           instance.mask);
+      } else {
+        decode_mask(c, first_coefficient + c.anchor, anchors, prototypes, lb, box_pixels, settings, probability,
+                    instance.mask);
+      }
     }
     out.push_back(std::move(instance));
   }

@@ -7,9 +7,12 @@
 // input (aspect kept, grey padding, RGB, / 255); one forward pass; decode the 1 x 116 x A
 // predictions (cx, cy, w, h in input pixels, 80 class scores already passed through a sigmoid, 32
 // mask coefficients per anchor); keep the best class of each anchor if its score reaches the
-// confidence threshold; class-aware greedy non-maximum suppression; per kept detection,
-// mask = sigmoid(coefficients . prototypes) on the 1 x 32 x H/4 x W/4 prototype grid, cropped to
-// the box, sampled bilinearly at every original pixel inside the box and thresholded.
+// confidence threshold; class-aware greedy non-maximum suppression; per kept detection, a mask
+// from the coefficients and the 1 x 32 x H/4 x W/4 prototypes in one of two orders
+// (Yolov8MaskDecoding): sigmoid on the prototype grid, cropped to the box there, sampled
+// bilinearly at every original pixel inside the box and thresholded; or ("retina") the
+// coefficients' combination sampled bilinearly at every original pixel inside the box, then the
+// sigmoid and the threshold, so that the box crops at image resolution.
 //
 // Determinism: no randomness; ties in score are broken by anchor index, so the same image gives
 // the same instances. OpenCV may use its own worker threads inside the forward pass; the results
@@ -34,6 +37,22 @@ inline constexpr int kYolov8PrototypeStride = 4;    ///< input pixels per protot
 inline constexpr int kYolov8MaxStride = 32;         ///< input sides must be multiples of this
 inline constexpr int kYolov8PredictionRows = kYolov8BoxValues + kCocoClassCount + kYolov8MaskCoefficients;
 
+/// The order in which a detection's mask is decoded (docs/SEGMENTATION.md, "Masks").
+enum class Yolov8MaskDecoding {
+  /// sigmoid on the prototype grid, zero on the cells whose centre is outside the box (the crop),
+  /// bilinear sample at each original pixel inside the box, threshold: Ultralytics' default
+  /// (process_mask), whose crop at a quarter of the input resolution rounds off the box's corners.
+  prototype_crop,
+  /// bilinear sample of the coefficients' combination of the prototypes (equivalently: the
+  /// prototypes upsampled to the image before the product) at each original pixel inside the box,
+  /// sigmoid, threshold: Ultralytics' retina_masks (process_mask_native); the crop to the box is in
+  /// image pixels.
+  retina,
+};
+
+/// "prototype_crop" or "retina".
+const char* to_string(Yolov8MaskDecoding decoding);
+
 struct Yolov8Settings {
   /// Minimum class score (already a probability) for a detection to be kept, in (0, 1].
   float confidence_threshold = 0.25f;
@@ -41,6 +60,8 @@ struct Yolov8Settings {
   float nms_iou_threshold = 0.7f;
   /// Mask probability above which a pixel belongs to the instance, in (0, 1).
   float mask_threshold = 0.5f;
+  /// Order of the mask decoding (sigmoid and crop before or after the resampling to the image).
+  Yolov8MaskDecoding mask_decoding = Yolov8MaskDecoding::prototype_crop;
   /// At most this many instances per frame (the best scores), >= 1.
   int max_detections = 300;
   /// Grey level of the letterbox padding (the value YOLOv8 was trained with), 0 .. 255.
