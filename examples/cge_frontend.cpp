@@ -225,15 +225,6 @@ std::unique_ptr<cge::InstanceSegmenter> make_segmenter(const Options& opt, const
   return nullptr;
 }
 
-/// The instance's box as the filter takes it: cv::Rect2f stores the clipped box in float, so its
-/// far edge may pass the image border by a rounding error; the filter rejects that, so clamp it.
-cge::PixelBox filter_box(const cv::Rect2f& box, cv::Size image_size) {
-  cge::PixelBox b = cge::opencv::to_pixel_box(box);
-  b.width_px = std::min(b.width_px, image_size.width - b.x_min_px);
-  b.height_px = std::min(b.height_px, image_size.height - b.y_min_px);
-  return b;
-}
-
 cv::Scalar label_colour(cge::FeatureLabel label) {
   switch (label) {
     case cge::FeatureLabel::static_feature:
@@ -345,7 +336,7 @@ int run(const Options& opt) {
     if (!instances[i].dynamic) continue;
     stats_index[i] = static_cast<int>(dynamic_instances.size());
     dynamic_instances.push_back(
-        cge::dynamic_instance(instances[i].mask, filter_box(instances[i].box_px, image.size()), instances[i].class_id));
+        cge::dynamic_instance(instances[i].mask, cge::filter_box(instances[i], image.size()), instances[i].class_id));
   }
   cge::DepthMADSettings mad_settings;
   mad_settings.mad_scale = opt.mad_scale;

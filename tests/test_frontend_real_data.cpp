@@ -72,14 +72,6 @@ double median_depth_near(const cv::Mat& mask, const cge::opencv::DepthView& dept
   return *middle;
 }
 
-// The box as the filter takes it: the float box may pass the border by a rounding error.
-cge::PixelBox inside_box(const cv::Rect2f& box, cv::Size size) {
-  cge::PixelBox b = cge::opencv::to_pixel_box(box);
-  b.width_px = std::min(b.width_px, size.width - b.x_min_px);
-  b.height_px = std::min(b.height_px, size.height - b.y_min_px);
-  return b;
-}
-
 }  // namespace
 
 // Measured with OpenCV 4.6 and yolov8n-seg-640 (SEGMENTATION.md): 1000 ORB features, two people;
@@ -129,7 +121,7 @@ TEST_CASE(
   for (const cge::SegmentedInstance& s : instances) {
     if (!s.dynamic) continue;
     people.push_back(&s);
-    dynamic.push_back(cge::dynamic_instance(s.mask, inside_box(s.box_px, image.size()), s.class_id));
+    dynamic.push_back(cge::dynamic_instance(s.mask, cge::filter_box(s, image.size()), s.class_id));
     any_mask |= s.mask;
   }
   REQUIRE(people.size() == 2);  // the sitting and the standing person

@@ -122,3 +122,24 @@ TEST_CASE("check_coco_class_ids: ids outside 0 .. 79 are named", "[segmentation]
   CHECK_THAT(cge_test::invalid_argument_message([] { cge::check_coco_class_ids({-1}, "test"); }),
              Catch::Contains("-1"));
 }
+
+TEST_CASE("filter_box: a box clipped in float stays inside the image for the filter", "[segmentation]") {
+  const cv::Size image(640, 480);
+  cge::SegmentedInstance inside;
+  inside.box_px = cv::Rect2f(10.25f, 20.5f, 100.f, 50.f);
+  const cge::PixelBox a = cge::filter_box(inside, image);
+  CHECK(a.x_min_px == 10.25);
+  CHECK(a.y_min_px == 20.5);
+  CHECK(a.width_px == 100.0);
+  CHECK(a.height_px == 50.0);
+  CHECK_NOTHROW(a.validate(image.width, image.height, "box"));
+
+  // x + width in float rounds past the border (x = 0.1f is not exact): clamped to end at 640, 480.
+  cge::SegmentedInstance at_border;
+  at_border.box_px = cv::Rect2f(0.1f, 0.3f, 639.9f + 1e-4f, 479.7f + 1e-4f);
+  const cge::PixelBox b = cge::filter_box(at_border, image);
+  CHECK(b.x_min_px + b.width_px <= 640.0);
+  CHECK(b.y_min_px + b.height_px <= 480.0);
+  CHECK(b.x_min_px == static_cast<double>(0.1f));
+  CHECK_NOTHROW(b.validate(image.width, image.height, "box"));
+}

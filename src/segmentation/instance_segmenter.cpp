@@ -1,5 +1,6 @@
 #include "cge/segmentation/instance_segmenter.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -76,6 +77,13 @@ cv::Mat instance_label_image(const std::vector<SegmentedInstance>& instances, cv
   // Paint back to front so that the instance earliest in the list ends on top.
   for (auto it = instances.rbegin(); it != instances.rend(); ++it) out.setTo(it->id, it->mask);
   return out;
+}
+
+PixelBox filter_box(const SegmentedInstance& instance, cv::Size image_size) {
+  PixelBox box{instance.box_px.x, instance.box_px.y, instance.box_px.width, instance.box_px.height};
+  box.width_px = std::min(box.width_px, image_size.width - box.x_min_px);
+  box.height_px = std::min(box.height_px, image_size.height - box.y_min_px);
+  return box;
 }
 
 }  // namespace cge

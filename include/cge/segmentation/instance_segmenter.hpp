@@ -19,6 +19,7 @@
 #include <opencv2/core.hpp>
 
 #include "cge/core/semantic_instance.hpp"
+#include "cge/frontend/pixel_box.hpp"
 
 namespace cge {
 
@@ -79,6 +80,11 @@ cv::Mat union_dynamic_masks(const std::vector<SegmentedInstance>& instances, cv:
 /// std::invalid_argument when an id is outside 1 .. 65535 or used twice, or a mask has the wrong
 /// type or size.
 cv::Mat instance_label_image(const std::vector<SegmentedInstance>& instances, cv::Size image_size);
+
+/// The instance's box as the dynamic-feature filter takes it. box_px is stored in float, so a box
+/// clipped to the image may pass its far border by a rounding error, which PixelBox::validate
+/// rejects: the far edges are clamped to image_size here (nothing else changes).
+PixelBox filter_box(const SegmentedInstance& instance, cv::Size image_size);
 
 /// The instance as the graph builder and the semantic pre-judgment see it: box centre, class and
 /// whether the class is dynamic.
