@@ -249,8 +249,11 @@ void append_person_primitives(const Person& person, double t, std::vector<Primit
     const Eigen::Vector3d hip = hip_centre + Eigen::Vector3d(sign * P.hip_half_width * k, 0, 0);
     Eigen::Vector3d knee, ankle;
     if (sitting) {
-      knee = hip + Eigen::Vector3d(0, P.thigh * k, 0);
-      // Shin tilted forwards just enough for the foot to reach the floor (hanging if it cannot).
+      // Thighs forwards, sloping down if the seat is high, so that a vertical shin puts the foot
+      // on the floor; on a low seat the shin leans forwards instead.
+      const double knee_z = std::min(hip.z(), (P.ankle_height + P.shin) * k);
+      const double slope = std::asin(std::min(1.0, (hip.z() - knee_z) / (P.thigh * k)));
+      knee = hip + P.thigh * k * Eigen::Vector3d(0, std::cos(slope), -std::sin(slope));
       const double reach = (knee.z() - P.ankle_height * k) / (P.shin * k);
       const double tilt = std::acos(std::min(1.0, std::max(-1.0, reach)));
       ankle = knee + P.shin * k * sagittal(tilt);

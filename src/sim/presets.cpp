@@ -232,12 +232,17 @@ void build_room(SceneBuilder& b) {
 
   // North: partition behind two desks, monitors, keyboards, books, cup, bottle, chairs, plant, clock.
   b.box({0, 2.85, 0.75}, {2.0, 0.03, 0.75}, 0,
-        b.material(Pattern::noise, rgb(0.55, 0.6, 0.68), rgb(0.3, 0.34, 0.42), 0.03));
-  for (int i = 0; i < 4; ++i) {
-    add_poster(b, {-1.5 + i * 1.0 + r.uniform(-0.15, 0.15), 2.815, 1.1 + r.uniform(-0.1, 0.1)},
-               -Eigen::Vector3d::UnitY(), r.uniform(0.15, 0.25), r.uniform(0.15, 0.25));
+        b.material(Pattern::noise, rgb(0.55, 0.6, 0.68), rgb(0.3, 0.34, 0.42), 0.1));
+  for (int i = 0; i < 6; ++i) {
+    add_poster(b, {-1.7 + i * 0.68 + r.uniform(-0.1, 0.1), 2.815, 1.1 + r.uniform(-0.15, 0.15)},
+               -Eigen::Vector3d::UnitY(), r.uniform(0.12, 0.2), r.uniform(0.12, 0.2));
   }
   add_poster(b, {-1.3, kHalfY - 0.005, 2.0}, -Eigen::Vector3d::UnitY(), 0.45, 0.3);
+  add_poster(b, {0.2, kHalfY - 0.005, 1.95}, -Eigen::Vector3d::UnitY(), 0.25, 0.32);
+  // A wall shelf with books above the partition.
+  b.box({2.4, kHalfY - 0.13, 1.75}, {0.6, 0.12, 0.015}, 0,
+        b.material(Pattern::planks, rgb(0.6, 0.45, 0.3), rgb(0.3, 0.2, 0.1), 0.1));
+  add_books(b, {2.3, kHalfY - 0.13, 1.765 + 0.12}, {0.4, 0.1, 0.12}, 0);
   {
     const std::uint16_t clock = b.object("clock");
     Primitive face = make_ellipsoid({1.6, kHalfY - 0.02, 2.0}, {0.16, 0.02, 0.16}, 0,
@@ -584,14 +589,14 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
     } else {
       // Objects appear at the place half a lap in, while the camera looks the other way.
       const int appear = static_cast<int>(std::lround(0.5 * frames / laps));
-      add_chair(builder, {2.45, -0.55}, -kPi / 2 + rng.uniform(-0.3, 0.3), appear);
+      add_chair(builder, {2.45, -0.45}, kPi / 2 + rng.uniform(-0.3, 0.3), appear);  // facing the camera
       add_plant(builder, {2.5, 0.15}, 0.7, appear);
       const std::uint16_t suitcase = builder.object("suitcase");
-      builder.box({2.75, 0.75, 0.33}, {0.12, 0.22, 0.32}, rng.uniform(-0.3, 0.3),
+      builder.box({2.8, 0.6, 0.33}, {0.12, 0.22, 0.32}, rng.uniform(-0.3, 0.3),
                   builder.material(Pattern::blocks, rgb(0.25, 0.3, 0.45), rgb(0.1, 0.12, 0.2), 0.12), suitcase, appear);
-      const std::uint16_t backpack = builder.object("backpack");
+      const std::uint16_t backpack = builder.object("backpack");  // on the chair's seat
       builder.add(
-          make_ellipsoid({2.2, 0.45, 0.2}, {0.12, 0.16, 0.2}, 0.4,
+          make_ellipsoid({2.45, -0.45, kSeatZ + 0.035 + 0.19}, {0.12, 0.16, 0.2}, 0.4,
                          builder.material(Pattern::checks, rgb(0.75, 0.35, 0.1), rgb(0.2, 0.2, 0.2), 0.08), backpack),
           appear);
     }

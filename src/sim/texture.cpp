@@ -112,8 +112,19 @@ Rgb plain(const Material& m, float x, float y, const std::uint8_t* t) {
 
 Rgb noise(const Material& m, float x, float y, const std::uint8_t* t) {
   constexpr float kContrast = 2.2f;
+  // Speckles: in some cells of a quarter the pattern's size, a dark spot (stucco, fabric slubs),
+  // which gives corner detectors something to hold on to in otherwise smooth noise.
+  constexpr float kSpotsPerCell = 4.0f;
+  constexpr std::uint32_t kSpotOdds = 5;  // one cell in kSpotOdds has a spot
+  constexpr float kSpotRadius = 0.3f;     // of a spot cell
+  constexpr float kSpotShade = 0.55f;
   const float n = noise01(t, x, y, m.salt);
-  return mix(to_rgb(m.colour_a), to_rgb(m.colour_b), clamp01((n - 0.5f) * kContrast + 0.5f));
+  const Rgb base = mix(to_rgb(m.colour_a), to_rgb(m.colour_b), clamp01((n - 0.5f) * kContrast + 0.5f));
+  const Cell c = cell_of(x * kSpotsPerCell, y * kSpotsPerCell);
+  const std::uint32_t h = hash_cell(c.col, c.row, m.salt ^ 0x5f3759dfu);
+  const float du = c.fu - 0.5f, dv = c.fv - 0.5f;
+  const bool spot = h % kSpotOdds == 0 && du * du + dv * dv < kSpotRadius * kSpotRadius;
+  return spot ? base * kSpotShade : base;
 }
 
 Rgb bricks(const Material& m, float x, float y, const std::uint8_t* t) {
@@ -228,7 +239,7 @@ Rgb screen(const Material& m, float x, float y, const std::uint8_t* t) {
   const Cell line = cell_of(x / kWordWidth, y / kLineHeight);
   const std::uint32_t word = hash_cell(line.col, line.row, m.salt + 5);
   const bool ink = line.fv > 0.3f && line.fv < 0.8f && line.fu < 0.2f + 0.75f * unit_float(word) && (word & 7u) != 0;
-  return ink ? Rgb{0.1f, 0.1f, 0.15f} : Rgb{0.95f, 0.95f, 0.93f};
+  return ink ? Rgb{0.35f, 0.35f, 0.4f} : Rgb{0.88f, 0.88f, 0.86f};
 }
 
 Rgb leaves(const Material& m, float x, float y) {
