@@ -18,7 +18,7 @@ using detail::PreparedPrimitive;
 using detail::Rgb;
 
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
-constexpr std::uint16_t kNoPrimitive = 0xFFFF;
+constexpr std::int32_t kNoPrimitive = -1;  // in the primitive-index buffer
 constexpr double kPi = 3.14159265358979323846;
 
 // ---- per-pixel random numbers: counter-based, a function of (seed, frame, pixel) only ------------
@@ -293,44 +293,52 @@ struct CapsuleHit {  // axis along local z from -half_length to +half_length
   }
 };
 
-/// Intersects every ray of the primitive's row spans, keeping the nearest hit per pixel.
+/// Intersects every ray of the primitive's row spans, keeping the nearest hit per pixel. The
+/// intersections of a span go to `scratch` first: that loop has no stores into the buffers and no
+/// branches, so it vectorises; the merge into the z-buffer follows.
 template <typename Hit>
-void raster(const PreparedPrimitive& p, std::uint16_t index, const Hit& hit, const std::int32_t* spans, cv::Mat& depth,
-            cv::Mat& ids) {
+void raster(const PreparedPrimitive& p, std::int32_t index, const Hit& hit, const std::int32_t* spans, float* scratch,
+            cv::Mat& depth, cv::Mat& ids) {
+  const float dux = p.dir_u[0], duy = p.dir_u[1], duz = p.dir_u[2];
   for (int v = p.v_begin; v < p.v_end; ++v) {
     const std::int32_t* span = spans + p.span_offset + 2 * (v - p.v_begin);
-    float* z_row = depth.ptr<float>(v);
-    std::uint16_t* id_row = ids.ptr<std::uint16_t>(v);
+    const int begin = span[0];
+    const int n = span[1] - begin;
     const float fv = static_cast<float>(v);
-    const float rx = p.dir_0[0] + fv * p.dir_v[0];
-    const float ry = p.dir_0[1] + fv * p.dir_v[1];
-    const float rz = p.dir_0[2] + fv * p.dir_v[2];
-    for (int u = span[0]; u < span[1]; ++u) {
-      const float fu = static_cast<float>(u);
-      const float z = hit(rx + fu * p.dir_u[0], ry + fu * p.dir_u[1], rz + fu * p.dir_u[2]);
-      const bool nearer = z < z_row[u];
-      z_row[u] = nearer ? z : z_row[u];
-      id_row[u] = nearer ? index : id_row[u];
+    const float rx = p.dir_0[0] + fv * p.dir_v[0] + static_cast<float>(begin) * dux;
+    const float ry = p.dir_0[1] + fv * p.dir_v[1] + static_cast<float>(begin) * duy;
+    const float rz = p.dir_0[2] + fv * p.dir_v[2] + static_cast<float>(begin) * duz;
+    for (int i = 0; i < n; ++i) {
+      const float fi = static_cast<float>(i);
+      scratch[i] = hit(rx + fi * dux, ry + fi * duy, rz + fi * duz);
+    }
+    float* z_row = depth.ptr<float>(v) + begin;
+    std::int32_t* id_row = ids.ptr<std::int32_t>(v) + begin;
+    for (int i = 0; i < n; ++i) {  // unconditional stores and integer masks: it vectorises too
+      const float old_z = z_row[i];
+      const std::int32_t nearer = scratch[i] < old_z ? 1 : 0;
+      z_row[i] = std::min(scratch[i], old_z);
+      id_row[i] += (index - id_row[i]) * nearer;
     }
   }
 }
 
-void raster_primitive(const PreparedPrimitive& p, std::uint16_t index, float near_m, const std::int32_t* spans,
-                      cv::Mat& depth, cv::Mat& ids) {
+void raster_primitive(const PreparedPrimitive& p, std::int32_t index, float near_m, const std::int32_t* spans,
+                      float* scratch, cv::Mat& depth, cv::Mat& ids) {
   const float* o = p.origin;
   switch (p.shape) {
     case Shape::quad:
-      raster(p, index, QuadHit{o[0], o[1], o[2], p.size[0], p.size[1], near_m}, spans, depth, ids);
+      raster(p, index, QuadHit{o[0], o[1], o[2], p.size[0], p.size[1], near_m}, spans, scratch, depth, ids);
       break;
     case Shape::box:
-      raster(p, index, BoxHit{o[0], o[1], o[2], p.size[0], p.size[1], p.size[2], near_m}, spans, depth, ids);
+      raster(p, index, BoxHit{o[0], o[1], o[2], p.size[0], p.size[1], p.size[2], near_m}, spans, scratch, depth, ids);
       break;
     case Shape::ellipsoid:
       raster(p, index, SphereHit{o[0], o[1], o[2], o[0] * o[0] + o[1] * o[1] + o[2] * o[2] - 1.0f, near_m}, spans,
-             depth, ids);
+             scratch, depth, ids);
       break;
     case Shape::capsule:
-      raster(p, index, CapsuleHit{o[0], o[1], o[2], p.size[0], p.size[2], near_m}, spans, depth, ids);
+      raster(p, index, CapsuleHit{o[0], o[1], o[2], p.size[0], p.size[2], near_m}, spans, scratch, depth, ids);
       break;
   }
 }
@@ -373,17 +381,25 @@ void sample_run(const PreparedPrimitive& p, const float* z, int u0, int n, float
   const float bz = p.dir_0[2] + fv * p.dir_v[2] + fu0 * duz;
   const float scale = p.texture_scale;
   const float min_cos2 = k.min_cos2_incidence;
+  if (kShape == Shape::quad) {
+    // The camera sees one side of a quad (the one its centre is on): one light for the run.
+    const float light = p.face_light[oz > 0 ? 5 : 4];
+    for (int i = 0; i < n; ++i) {
+      const float fi = static_cast<float>(i);
+      const float dx = bx + fi * dux, dy = by + fi * duy, dz = bz + fi * duz;
+      out.x[i] = (ox + z[i] * dx) * scale;
+      out.y[i] = (oy + z[i] * dy) * scale;
+      out.light[i] = light;
+      out.measurable[i] = dz * dz >= min_cos2 * (dx * dx + dy * dy + dz * dz) ? 1 : 0;
+    }
+    return;
+  }
   for (int i = 0; i < n; ++i) {
     const float fi = static_cast<float>(i);
     const float dx = bx + fi * dux, dy = by + fi * duy, dz = bz + fi * duz;
     const float qx = ox + z[i] * dx, qy = oy + z[i] * dy, qz = oz + z[i] * dz;
     const float len2 = dx * dx + dy * dy + dz * dz;
-    if (kShape == Shape::quad) {
-      out.x[i] = qx * scale;
-      out.y[i] = qy * scale;
-      out.light[i] = p.face_light[dz < 0 ? 5 : 4];  // the side facing the camera
-      out.measurable[i] = dz * dz >= min_cos2 * len2 ? 1 : 0;
-    } else if (kShape == Shape::box) {
+    if (kShape == Shape::box) {
       // The face hit: the axis where the point is relatively farthest out.
       const float rx = std::abs(qx) * p.inv_size[0], ry = std::abs(qy) * p.inv_size[1];
       const float rz = std::abs(qz) * p.inv_size[2];
@@ -510,10 +526,11 @@ void SequenceRenderer::render_into(int index, RenderedFrame& frame, RenderWorksp
   frame.depth.create(height, width, CV_16UC1);
   frame.instance_labels.create(height, width, CV_16UC1);
   ws.depth_exact_m.create(height, width, CV_32FC1);
-  ws.primitive_index.create(height, width, CV_16UC1);
+  ws.primitive_index.create(height, width, CV_32SC1);
   ws.depth_exact_m.setTo(kInfinity);
   ws.primitive_index.setTo(kNoPrimitive);
 
+  ws.row_x.resize(static_cast<std::size_t>(width));  // raster scratch (a span is at most a row)
   // Visibility: prepare and z-buffer every primitive present in this frame.
   collect_primitives(index, ws);
   const Eigen::Isometry3d T_camera_world = frame.T_world_camera.inverse();
@@ -527,8 +544,8 @@ void SequenceRenderer::render_into(int index, RenderedFrame& frame, RenderWorksp
     }
   }
   for (std::size_t i = 0; i < ws.prepared.size(); ++i) {
-    raster_primitive(ws.prepared[i], static_cast<std::uint16_t>(i), near_m, ws.spans.data(), ws.depth_exact_m,
-                     ws.primitive_index);
+    raster_primitive(ws.prepared[i], static_cast<std::int32_t>(i), near_m, ws.spans.data(), ws.row_x.data(),
+                     ws.depth_exact_m, ws.primitive_index);
   }
 
   shade(ws, frame);
@@ -557,13 +574,13 @@ void SequenceRenderer::shade(RenderWorkspace& ws, RenderedFrame& frame) const {
 
   for (int v = 0; v < height; ++v) {
     const float* z_row = ws.depth_exact_m.ptr<float>(v);
-    const std::uint16_t* id_row = ws.primitive_index.ptr<std::uint16_t>(v);
+    const std::int32_t* id_row = ws.primitive_index.ptr<std::int32_t>(v);
     std::uint8_t* bgr = frame.rgb.ptr<std::uint8_t>(v);
     std::uint16_t* label_row = frame.instance_labels.ptr<std::uint16_t>(v);
     std::uint8_t* measurable_row = ws.measurable.ptr<std::uint8_t>(v);
     const float fv = static_cast<float>(v);
     for (int u0 = 0; u0 < width;) {
-      const std::uint16_t pi = id_row[u0];
+      const std::int32_t pi = id_row[u0];
       int u1 = u0 + 1;
       while (u1 < width && id_row[u1] == pi) ++u1;
       const int n = u1 - u0;
@@ -577,15 +594,11 @@ void SequenceRenderer::shade(RenderWorkspace& ws, RenderedFrame& frame) const {
       const PreparedPrimitive& p = ws.prepared[pi];
       sample_run(p, z_row + u0, u0, n, fv, k,
                  RunSamples{ws.row_x.data(), ws.row_y.data(), ws.row_light.data(), measurable_row + u0});
-      detail::texture_run(*p.material, ws.row_x.data(), ws.row_y.data(), n, noise_table, ws.row_colour.data());
-      const float* rgb = ws.row_colour.data();
-      const float* light = ws.row_light.data();
+      detail::texture_run(*p.material, ws.row_x.data(), ws.row_y.data(), ws.row_light.data(), n, noise_table,
+                          ws.row_colour.data());
+      const float* colour = ws.row_colour.data();
       std::uint8_t* out = bgr + 3 * u0;
-      for (int i = 0; i < n; ++i) {
-        out[3 * i] = to_byte(rgb[3 * i + 2] * light[i]);
-        out[3 * i + 1] = to_byte(rgb[3 * i + 1] * light[i]);
-        out[3 * i + 2] = to_byte(rgb[3 * i] * light[i]);
-      }
+      for (int j = 0; j < 3 * n; ++j) out[j] = to_byte(colour[j]);  // vectorises
       std::fill(label_row + u0, label_row + u1, p.instance_id);
       u0 = u1;
     }

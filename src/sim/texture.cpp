@@ -274,45 +274,47 @@ const std::uint8_t* noise_table() {
 
 namespace {
 
-/// Applies one pattern to a run of points (the pattern's code inlined into the loop).
+/// Applies one pattern to a run of points (the pattern's code inlined into the loop), scaled by
+/// the light and stored as b, g, r.
 template <typename Pattern>
-void run(const float* x, const float* y, int n, float* rgb_out, Pattern pattern) {
+void run(const float* x, const float* y, const float* light, int n, float* bgr_out, Pattern pattern) {
   // Keep cell coordinates where float-to-int conversions are exact and defined.
   constexpr float kLimit = 1e5f;
   for (int i = 0; i < n; ++i) {
     const float xi = std::min(std::max(x[i], -kLimit), kLimit);
     const float yi = std::min(std::max(y[i], -kLimit), kLimit);
     const Rgb c = pattern(xi, yi);
-    rgb_out[3 * i] = c.r;
-    rgb_out[3 * i + 1] = c.g;
-    rgb_out[3 * i + 2] = c.b;
+    bgr_out[3 * i] = c.b * light[i];
+    bgr_out[3 * i + 1] = c.g * light[i];
+    bgr_out[3 * i + 2] = c.r * light[i];
   }
 }
 
 }  // namespace
 
-void texture_run(const Material& m, const float* x, const float* y, int n, const std::uint8_t* t, float* rgb_out) {
+void texture_run(const Material& m, const float* x, const float* y, const float* light, int n, const std::uint8_t* t,
+                 float* bgr_out) {
   switch (m.pattern) {
     case Pattern::plain:
-      return run(x, y, n, rgb_out, [&](float a, float b) { return plain(m, a, b, t); });
+      return run(x, y, light, n, bgr_out, [&](float a, float b) { return plain(m, a, b, t); });
     case Pattern::noise:
-      return run(x, y, n, rgb_out, [&](float a, float b) { return noise(m, a, b, t); });
+      return run(x, y, light, n, bgr_out, [&](float a, float b) { return noise(m, a, b, t); });
     case Pattern::bricks:
-      return run(x, y, n, rgb_out, [&](float a, float b) { return bricks(m, a, b, t); });
+      return run(x, y, light, n, bgr_out, [&](float a, float b) { return bricks(m, a, b, t); });
     case Pattern::planks:
-      return run(x, y, n, rgb_out, [&](float a, float b) { return planks(m, a, b, t); });
+      return run(x, y, light, n, bgr_out, [&](float a, float b) { return planks(m, a, b, t); });
     case Pattern::tiles:
-      return run(x, y, n, rgb_out, [&](float a, float b) { return tiles(m, a, b, t); });
+      return run(x, y, light, n, bgr_out, [&](float a, float b) { return tiles(m, a, b, t); });
     case Pattern::blocks:
-      return run(x, y, n, rgb_out, [&](float a, float b) { return blocks(m, a, b); });
+      return run(x, y, light, n, bgr_out, [&](float a, float b) { return blocks(m, a, b); });
     case Pattern::checks:
-      return run(x, y, n, rgb_out, [&](float a, float b) { return checks(m, a, b); });
+      return run(x, y, light, n, bgr_out, [&](float a, float b) { return checks(m, a, b); });
     case Pattern::spines:
-      return run(x, y, n, rgb_out, [&](float a, float b) { return spines(m, a, b); });
+      return run(x, y, light, n, bgr_out, [&](float a, float b) { return spines(m, a, b); });
     case Pattern::screen:
-      return run(x, y, n, rgb_out, [&](float a, float b) { return screen(m, a, b, t); });
+      return run(x, y, light, n, bgr_out, [&](float a, float b) { return screen(m, a, b, t); });
     case Pattern::leaves:
-      return run(x, y, n, rgb_out, [&](float a, float b) { return leaves(m, a, b); });
+      return run(x, y, light, n, bgr_out, [&](float a, float b) { return leaves(m, a, b); });
   }
 }
 

@@ -51,10 +51,11 @@ inline std::int32_t floor_int(float x) {
 /// The smooth-noise table the patterns read (built on first use, then shared and read-only).
 const std::uint8_t* noise_table();
 
-/// The colours (r, g, b interleaved into rgb_out) of `material` at n surface points (x[i], y[i])
-/// in cells of the pattern (metres divided by Material::scale_m); `table` is noise_table().
-void texture_run(const Material& material, const float* x, const float* y, int n, const std::uint8_t* table,
-                 float* rgb_out);
+/// The colours of `material` at n surface points (x[i], y[i]) in cells of the pattern (metres
+/// divided by Material::scale_m), times light[i], interleaved as b, g, r into bgr_out (3 n floats);
+/// `table` is noise_table().
+void texture_run(const Material& material, const float* x, const float* y, const float* light, int n,
+                 const std::uint8_t* table, float* bgr_out);
 
 }  // namespace detail
 }  // namespace sim

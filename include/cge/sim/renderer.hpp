@@ -53,7 +53,7 @@ struct RenderWorkspace {
   /// the sensor model starts from), +infinity where the ray hits nothing.
   cv::Mat depth_exact_m;
   // Scratch (not an interface).
-  cv::Mat primitive_index;  ///< CV_16UC1, index into `prepared` of the nearest surface
+  cv::Mat primitive_index;  ///< CV_32SC1, index into `prepared` of the nearest surface, -1 for none
   cv::Mat measurable;       ///< CV_8UC1, 1 where the surface is not seen too obliquely for depth
   std::vector<Primitive> people_primitives;
   std::vector<const Primitive*> frame_primitives;
