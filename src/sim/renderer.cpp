@@ -527,8 +527,10 @@ void SequenceRenderer::render_into(int index, RenderedFrame& frame, RenderWorksp
   frame.instance_labels.create(height, width, CV_16UC1);
   ws.depth_exact_m.create(height, width, CV_32FC1);
   ws.primitive_index.create(height, width, CV_32SC1);
-  ws.depth_exact_m.setTo(kInfinity);
-  ws.primitive_index.setTo(kNoPrimitive);
+  for (int v = 0; v < height; ++v) {  // plain loops: no OpenCV call that might use threads
+    std::fill_n(ws.depth_exact_m.ptr<float>(v), width, kInfinity);
+    std::fill_n(ws.primitive_index.ptr<std::int32_t>(v), width, kNoPrimitive);
+  }
 
   ws.row_x.resize(static_cast<std::size_t>(width));  // raster scratch (a span is at most a row)
   // Visibility: prepare and z-buffer every primitive present in this frame.

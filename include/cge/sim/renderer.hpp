@@ -3,13 +3,15 @@
 // instance labels, ground-truth pose), any frame in any order.
 //
 // Method: a z-buffer ray caster. Each primitive's bounding box is projected to the screen (clipped
-// at the near plane) and only the rays inside that convex outline are intersected with it; then one
-// pass shades every pixel once (procedural texture, Lambert + ambient) and applies the depth-sensor
-// model. Rays go through pixel centres: pixel (u, v) looks along ((u - cx) / fx, (v - cy) / fy, 1).
+// at the near plane) and only the rays inside that convex outline are intersected with it; then
+// every pixel is shaded once (procedural texture, Lambert + ambient) and the depth-sensor model is
+// applied (docs/SIMULATION.md). Rays go through pixel centres: pixel (u, v) looks along
+// ((u - cx) / fx, (v - cy) / fy, 1).
 //
-// Determinism: render(i) is a function of the spec and i only. The depth noise and dropout of frame
-// i come from an engine seeded with (spec.seed, i) by splitmix64, drawn in row-major pixel order.
-// No threads, no OpenCV calls that may use threads: same spec and index, bit-identical images.
+// Determinism: render(i) is a function of the spec and i only. The depth noise and dropout of
+// pixel p of frame i come from hashes of p under a key derived from (spec.seed, i) by splitmix64
+// (counter-based: no engine state carried between pixels or frames). No threads, no OpenCV calls
+// that may use threads: same spec and index, bit-identical images.
 // The renderer is immutable after construction; render() is safe to call from several threads,
 // render_into() too when each thread has its own workspace and frame.
 
@@ -82,7 +84,8 @@ class SequenceRenderer {
   RenderedFrame render(int index) const;
 
   /// The same into existing buffers (reallocated only when their size or type is wrong), for loops
-  /// that render many frames. workspace.depth_exact_m holds the exact depth afterwards.
+  /// that render many frames: the frame's images are overwritten in place, so clone them to keep
+  /// a frame. workspace.depth_exact_m holds the exact depth afterwards.
   void render_into(int index, RenderedFrame& frame, RenderWorkspace& workspace) const;
 
   /// Every primitive present in frame `index`, in world coordinates (static ones, those added by
