@@ -1,8 +1,7 @@
 // The synthetic-sequence output path per frame: the segmentation error model, the PNG encoding of
 // one frame's four images (each compression choice), and one frame written to disk. Budget
 // (docs/SIMULATION_IO.md): 300 frames in 15 s = 50 ms a frame, of which the renderer takes up to
-// 20 ms, leaving ~30 ms for this part. With the renderer in the tree (CGE_SIM_HAVE_RENDERER) a
-// whole 300-frame sequence is also rendered and written.
+// 20 ms, leaving ~30 ms for this part. A whole 300-frame sequence is also rendered and written.
 //
 // The frame imitates a rendered one: a 640 x 480 room of smoothly textured surfaces with a little
 // pixel noise, depth from 1 to 4 m with noise growing with the square of the range and holes, two
@@ -24,9 +23,8 @@
 #include "cge/sim/segmentation_error_model.hpp"
 #include "cge/sim/tum_writer.hpp"
 
-#ifdef CGE_SIM_HAVE_RENDERER
+#include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
-#endif
 
 namespace {
 
@@ -150,7 +148,6 @@ void BM_SimIO_WriteFrame(benchmark::State& state) {
 }
 BENCHMARK(BM_SimIO_WriteFrame)->Unit(benchmark::kMillisecond);
 
-#ifdef CGE_SIM_HAVE_RENDERER
 // ---- a whole sequence, rendered and written: the 15 s budget for range(0) = 300 frames ------------
 
 void BM_SimIO_WriteSequence(benchmark::State& state) {
@@ -166,6 +163,5 @@ void BM_SimIO_WriteSequence(benchmark::State& state) {
       static_cast<double>(frames) * 1e-3, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_SimIO_WriteSequence)->Arg(300)->Unit(benchmark::kSecond)->Iterations(1);
-#endif
 
 }  // namespace

@@ -28,11 +28,8 @@
 #include "cge/sim/segmentation_error_model.hpp"
 #include "cge/sim/tum_writer.hpp"
 
-// The scene renderer and its presets (cge/sim/renderer.hpp) are built on another branch; this
-// build defines CGE_SIM_HAVE_RENDERER (examples/CMakeLists.txt) when the header is in the tree.
-#ifdef CGE_SIM_HAVE_RENDERER
+#include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
-#endif
 
 #ifndef CGE_VERSION_STRING
 #define CGE_VERSION_STRING "unknown"
@@ -69,39 +66,20 @@ struct Options {
 
 // ---- the renderer: the only part of this tool that knows it ------------------------------------
 
-std::vector<std::string> known_presets() {
-#ifdef CGE_SIM_HAVE_RENDERER
-  return cge::sim::preset_names();
-#else
-  return {};
-#endif
-}
+std::vector<std::string> known_presets() { return cge::sim::preset_names(); }
 
 void check_preset(const std::string& name) {
-#ifdef CGE_SIM_HAVE_RENDERER
   const std::vector<std::string> names = known_presets();
   if (std::find(names.begin(), names.end(), name) == names.end()) {
     std::string list;
     for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
     throw UsageError("unknown preset '" + name + "' (known presets: " + list + ")");
   }
-#else
-  (void)name;
-#endif
 }
 
 std::unique_ptr<cge::sim::FrameSource> open_preset(const std::string& name, int frames, std::uint64_t seed) {
-#ifdef CGE_SIM_HAVE_RENDERER
   using Renderer = cge::sim::SequenceRenderer;
   return std::make_unique<cge::sim::RendererFrameSource<Renderer>>(Renderer(cge::sim::make_preset(name, frames, seed)));
-#else
-  (void)frames;
-  (void)seed;
-  throw std::runtime_error(
-      "renderer not available: this build of cge_sim has no scene renderer "
-      "(cge/sim/renderer.hpp), so preset '" +
-      name + "' cannot be rendered");
-#endif
 }
 
 // ---- the rest ----------------------------------------------------------------------------------
@@ -255,12 +233,7 @@ int main(int argc, char** argv) {
   app.add_flag_callback(
       "--list-presets",
       [] {
-        const std::vector<std::string> names = known_presets();
-        if (names.empty()) {
-          std::fprintf(stderr, "%s: error: renderer not available: this build has no presets\n", kProgram);
-          throw CLI::RuntimeError(kExitFailure);
-        }
-        for (const std::string& n : names) std::printf("%s\n", n.c_str());
+        for (const std::string& n : known_presets()) std::printf("%s\n", n.c_str());
         throw CLI::Success();
       },
       "print the preset names and exit");
