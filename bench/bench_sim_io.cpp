@@ -1,6 +1,6 @@
 // The synthetic-sequence output path per frame: the segmentation error model, the PNG encoding of
 // one frame's four images (each compression choice), and one frame written to disk. Budget
-// (docs/SIMULATION_IO.md): 300 frames in 15 s = 50 ms a frame, of which the renderer takes up to
+// (docs/SIMULATION.md): 300 frames in 15 s = 50 ms a frame, of which the renderer takes up to
 // 20 ms, leaving ~30 ms for this part. A whole 300-frame sequence is also rendered and written.
 //
 // The frame imitates a rendered one: a 640 x 480 room of smoothly textured surfaces with a little

@@ -1,5 +1,5 @@
 // cge_sim: renders a synthetic dynamic RGB-D sequence from a preset and writes it in the TUM
-// layout with ground-truth and simulated-network instance masks. See docs/SIMULATION_IO.md.
+// layout with ground-truth and simulated-network instance masks. See docs/SIMULATION.md.
 //
 // Standard output: one summary line on success. Standard error: diagnostics, and a progress bar
 // when standard error is a terminal (nothing per frame otherwise, so logs stay clean).
@@ -193,7 +193,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Renders a synthetic dynamic RGB-D sequence (cge " CGE_VERSION_STRING
                ") and writes it in the TUM layout:\nrgb/, depth/, rgb.txt, depth.txt, groundtruth.txt, "
                "camera.yaml, loops.txt, masks/ (ground truth) and\nsegmentation/ (after the segmentation "
-               "error model). Same arguments, same bytes. See docs/SIMULATION_IO.md.",
+               "error model). Same arguments, same bytes. See docs/SIMULATION.md.",
                kProgram};
   app.set_version_flag("--version", std::string(kProgram) + " " + CGE_VERSION_STRING);
   app.add_option("--preset", opt.preset, "scenario, e.g. walking_xyz (--list-presets shows them)")->required();

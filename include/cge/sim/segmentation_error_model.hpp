@@ -5,7 +5,7 @@
 // the depth MAD test is meant to catch), the feet cut off, whole instances missed in a frame, and
 // false positives (a blob where there is no object, with its own class and id).
 //
-// What happens to one frame (docs/SIMULATION_IO.md has the exact rules):
+// What happens to one frame (docs/SIMULATION.md has the exact rules):
 // 1. Every instance of an affected class (settings.affected_class_ids, or all classes) present in
 //    the image, in ascending id order:
 //    a. missed with probability miss_probability: all its pixels become background;

@@ -4,7 +4,7 @@
 //   rgb/<stem>.png            8-bit colour (the frame's BGR image, stored as PNG's RGB)
 //   depth/<stem>.png          16-bit depth, camera.depth_units_per_metre per metre (5000), 0 = none
 //   masks/<stem>.png          16-bit ground-truth instance labels   } the mask-folder format
-//   masks/instances.csv       id,class_id,class_name,moving         } (docs/SIMULATION_IO.md)
+//   masks/instances.csv       id,class_id,class_name,moving         } (docs/SIMULATION.md)
 //   segmentation/<stem>.png   16-bit labels after the segmentation error model
 //   segmentation/instances.csv   the scene's instances plus the false positives that occur
 //   rgb.txt, depth.txt        "timestamp filename" lists, as in TUM
@@ -41,7 +41,7 @@ struct TumWriterSettings {
   /// PNG compression of every image. kPngFast (-1): OpenCV's speed path (zlib level 1, RLE
   /// matching, the SUB row filter), the fastest by far on rendered frames; 0 .. 9: that zlib level
   /// with libpng's adaptive row filters, about 3 times slower for files ~5% smaller (level 0:
-  /// slower and 2.3 times larger). Measurements in docs/SIMULATION_IO.md.
+  /// slower and 2.3 times larger). Measurements in docs/SIMULATION.md.
   int png_compression = kPngFast;
   /// Write into an existing non-empty folder (overwriting this writer's own files, deleting nothing).
   bool force = false;
