@@ -5,7 +5,6 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -16,8 +15,6 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -25,6 +22,7 @@
 #include "cge/sim/frame_source.hpp"
 #include "cge/sim/segmentation_error_model.hpp"
 #include "cge/sim/tum_writer.hpp"
+#include "temp_dir.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -103,27 +101,7 @@ SegmentationErrorSettings only_offset(int k) {
   return s;
 }
 
-/// A folder under the system temp folder that this test made; removed (with what the test wrote
-/// into it) when the object goes.
-class TempDir {
- public:
-  TempDir() {
-    static std::atomic<int> counter{0};
-    path_ =
-        fs::temp_directory_path() / ("cge_test_sim_io_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using cge_test::TempDir;
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -491,7 +469,7 @@ TEST_CASE("TUM format: timestamps with 6 decimals, poses with a canonical quater
 TEST_CASE("TUM writer: every file read back matches the sequence", "[sim][tum_writer]") {
   const auto seq = small_sequence(6);
   SegmentationErrorModel model(seq.instances(), 5, noisy_settings());
-  TempDir tmp;
+  TempDir tmp{"cge_test_sim_io"};
   const fs::path out = tmp.path() / "seq";
   std::vector<std::pair<int, int>> progress;
   cge::sim::TumWriterSettings ws;
@@ -611,7 +589,7 @@ TEST_CASE("TUM writer: every file read back matches the sequence", "[sim][tum_wr
 
 TEST_CASE("TUM writer: same sequence and seed, same bytes in every file", "[sim][tum_writer]") {
   const auto seq = small_sequence(5);
-  TempDir tmp;
+  TempDir tmp{"cge_test_sim_io"};
   SegmentationErrorModel model(seq.instances(), 77, noisy_settings());
   cge::sim::write_tum_sequence(seq, model, tmp.path() / "a", {});
   SegmentationErrorModel again(seq.instances(), 77, noisy_settings());
@@ -639,7 +617,7 @@ TEST_CASE("TUM writer: same sequence and seed, same bytes in every file", "[sim]
 TEST_CASE("TUM writer: a non-empty folder is refused; with force only the writer's files change", "[sim][tum_writer]") {
   const auto seq = small_sequence(3);
   SegmentationErrorModel model(seq.instances(), 1);
-  TempDir tmp;
+  TempDir tmp{"cge_test_sim_io"};
   const fs::path out = tmp.path() / "seq";
   fs::create_directories(out / "rgb");
   { std::ofstream(out / "notes.txt") << "the user's notes\n"; }
@@ -675,7 +653,7 @@ TEST_CASE("TUM writer: a non-empty folder is refused; with force only the writer
 TEST_CASE("TUM writer: a file that cannot be written is reported with its path", "[sim][tum_writer]") {
   const auto seq = small_sequence(2);
   SegmentationErrorModel model(seq.instances(), 1);
-  TempDir tmp;
+  TempDir tmp{"cge_test_sim_io"};
   fs::create_directories(tmp.path() / "groundtruth.txt");  // a folder where the writer wants a file
   cge::sim::TumWriterSettings force;
   force.force = true;
@@ -688,7 +666,7 @@ TEST_CASE("TUM writer: a file that cannot be written is reported with its path",
 }
 
 TEST_CASE("TUM writer: bad sequences are refused before the disk is touched", "[sim][tum_writer]") {
-  TempDir tmp;
+  TempDir tmp{"cge_test_sim_io"};
   const fs::path out = tmp.path() / "never";
   auto seq = small_sequence(0);
   SegmentationErrorModel model(seq.instances(), 1);
@@ -714,7 +692,7 @@ TEST_CASE("TUM writer: bad sequences are refused before the disk is touched", "[
 }
 
 TEST_CASE("TUM writer: bad frames are refused with the frame named", "[sim][tum_writer]") {
-  TempDir tmp;
+  TempDir tmp{"cge_test_sim_io"};
   auto seq = small_sequence(4);
   SegmentationErrorModel model(seq.instances(), 1);
   seq.frames[2].depth = cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0f));
@@ -756,7 +734,7 @@ TEST_CASE("RendererFrameSource: a renderer-like type written like any other sour
   CHECK(source.frame_count() == 3);
   CHECK(source.camera().width_px == 64);
   CHECK(source.render(2).index == 2);
-  TempDir tmp;
+  TempDir tmp{"cge_test_sim_io"};
   SegmentationErrorModel model(source.instances(), 3, noisy_settings());
   cge::sim::write_tum_sequence(source, model, tmp.path() / "a", {});
   cge::sim::write_tum_sequence(source.renderer().frames, model, tmp.path() / "b", {});
@@ -780,7 +758,7 @@ TEST_CASE("simulate_frame: a frame and its segmentation in memory", "[sim][tum_w
 TEST_CASE("TumSequenceWriter: frames encoded by the caller give the same files", "[sim][tum_writer]") {
   const auto seq = small_sequence(4);
   SegmentationErrorModel model(seq.instances(), 21, noisy_settings());
-  TempDir tmp;
+  TempDir tmp{"cge_test_sim_io"};
   cge::sim::write_tum_sequence(seq, model, tmp.path() / "a", {});
   cge::sim::check_sequence(seq, model);
   cge::sim::TumSequenceWriter writer(tmp.path() / "b", seq.camera(), seq.frame_rate_hz(), seq.instances());
