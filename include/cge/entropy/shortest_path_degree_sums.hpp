@@ -42,22 +42,32 @@ void fill_table(const Graph<Scalar>& g, DegreeSumTable& table) {
   const std::int32_t n = g.num_nodes();
   const std::vector<std::int32_t> order = local_source_order(g);
   Sweep sweep(g);
-  std::vector<std::vector<double>> rows_by_source(static_cast<std::size_t>(n));
+  // Rows arrive block by block; they are staged in one buffer (the 64 block rows keep their
+  // storage) and copied into source order at the end.
   std::vector<std::vector<double>> block_rows(64);
+  std::vector<double> staged;
+  std::vector<std::int64_t> staged_at(static_cast<std::size_t>(n) + 1, 0);
+  std::vector<std::int32_t> row_length(static_cast<std::size_t>(n), 0);
   for (std::size_t first = 0; first < order.size(); first += 64) {
     const int lanes = static_cast<int>(std::min<std::size_t>(64, order.size() - first));
     const std::int64_t reached = sweep.run(order.data() + first, lanes, block_rows);
     if (reached < static_cast<std::int64_t>(lanes) * n) table.connected = false;
-    for (int i = 0; i < lanes; ++i)
-      rows_by_source[static_cast<std::size_t>(order[first + static_cast<std::size_t>(i)])].swap(
-          block_rows[static_cast<std::size_t>(i)]);
+    for (int i = 0; i < lanes; ++i) {
+      const std::size_t s = static_cast<std::size_t>(order[first + static_cast<std::size_t>(i)]);
+      const std::vector<double>& row = block_rows[static_cast<std::size_t>(i)];
+      staged_at[s] = static_cast<std::int64_t>(staged.size());
+      row_length[s] = static_cast<std::int32_t>(row.size());
+      staged.insert(staged.end(), row.begin(), row.end());
+    }
   }
+  table.values.resize(staged.size());
   table.row_offsets.assign(static_cast<std::size_t>(n) + 1, 0);
-  for (std::int32_t s = 0; s < n; ++s) {
-    const std::vector<double>& row = rows_by_source[static_cast<std::size_t>(s)];
-    table.values.insert(table.values.end(), row.begin(), row.end());
-    table.row_offsets[static_cast<std::size_t>(s) + 1] = static_cast<std::int64_t>(table.values.size());
-    table.diameter = std::max(table.diameter, static_cast<std::int32_t>(row.size()));
+  std::int64_t at = 0;
+  for (std::size_t s = 0; s < static_cast<std::size_t>(n); ++s) {
+    std::copy_n(staged.begin() + staged_at[s], row_length[s], table.values.begin() + at);
+    at += row_length[s];
+    table.row_offsets[s + 1] = at;
+    table.diameter = std::max(table.diameter, row_length[s]);
   }
 }
 
