@@ -1,12 +1,14 @@
 // Tests of the degree-degree association entropy (ALGORITHMS.md section 4):
 // shortest_path_degree_sums against an independent path-enumeration oracle, DegreeDegreeEntropy
 // against a naive direct formula, the worked values of the spec, invariance under relabelling,
-// numerics on SLAM-sized graphs, and edge cases.
+// numerics on SLAM-sized graphs, edge cases, and the sweep's kernels (portable and AVX-512) against
+// each other and against an ordered scalar reference, bit for bit.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <numeric>
@@ -493,6 +495,186 @@ void check_against_oracle(const Entropy& dde, const cge::Graph<double>& g, const
 }
 
 using cge_test::is_connected;
+
+// ---------------------------------------------------------------------------------------------
+// The sweep's kernels
+// ---------------------------------------------------------------------------------------------
+
+/// The kernels this machine can run (automatic and portable always; avx512 where the CPU has it).
+std::vector<cge::DegreeSumKernel> available_kernels() {
+  std::vector<cge::DegreeSumKernel> kernels{cge::DegreeSumKernel::automatic, cge::DegreeSumKernel::portable};
+  if (cge::degree_sum_kernel_available(cge::DegreeSumKernel::avx512)) kernels.push_back(cge::DegreeSumKernel::avx512);
+  return kernels;
+}
+
+const char* kernel_name(cge::DegreeSumKernel k) {
+  switch (k) {
+    case cge::DegreeSumKernel::automatic:
+      return "automatic";
+    case cge::DegreeSumKernel::portable:
+      return "portable";
+    case cge::DegreeSumKernel::avx512:
+      return "avx512";
+  }
+  return "?";
+}
+
+/// a * b rounded on its own: a fused multiply-add would round a * b + c only once.
+double separate_product(double a, double b) {
+  volatile double product = a * b;
+  return product;
+}
+
+/// The documented floating-point order, one plain BFS per source, in double: for a node, its
+/// predecessors in ascending node order, S += (S_p + N_p * diff) with the product rounded on its
+/// own; Delta(s, k) over the nodes at distance k in ascending order; TieMode::mean scales a
+/// source's level by 2^-512 when its largest count passes 2^512. Every kernel must agree with it
+/// bit for bit.
+cge::DegreeSumTable ordered_reference(const SmallGraph& g, TieMode mode) {
+  const auto N = static_cast<std::size_t>(g.n);
+  std::vector<std::vector<int>> adj(N);
+  for (const auto& [u, v] : g.edges) {
+    adj[static_cast<std::size_t>(u)].push_back(v);
+    adj[static_cast<std::size_t>(v)].push_back(u);
+  }
+  for (auto& list : adj) std::sort(list.begin(), list.end());
+  cge::DegreeSumTable t;
+  t.num_nodes = g.n;
+  t.row_offsets.assign(N + 1, 0);
+  std::vector<std::vector<double>> rows(N);
+  for (std::size_t s = 0; s < N; ++s) {
+    std::vector<int> dist(N, -1);
+    std::vector<double> count(N, 0.0), sum(N, mode == TieMode::min ? std::numeric_limits<double>::infinity() : 0.0);
+    dist[s] = 0;
+    count[s] = 1.0;
+    sum[s] = 0.0;
+    std::vector<std::size_t> level{s};
+    std::size_t reached = 1;
+    for (int k = 1;; ++k) {
+      std::vector<std::size_t> next;
+      for (const std::size_t p : level)
+        for (const int w : adj[p])
+          if (dist[static_cast<std::size_t>(w)] < 0) {
+            dist[static_cast<std::size_t>(w)] = k;
+            next.push_back(static_cast<std::size_t>(w));
+          }
+      if (next.empty()) break;
+      std::sort(next.begin(), next.end());
+      double layer = 0.0, max_count = 0.0;
+      for (const std::size_t u : next) {
+        for (const int pi : adj[u]) {  // ascending
+          const auto p = static_cast<std::size_t>(pi);
+          if (dist[p] != k - 1) continue;
+          const double diff = std::fabs(static_cast<double>(adj[p].size()) - static_cast<double>(adj[u].size()));
+          if (mode == TieMode::min) {
+            sum[u] = std::min(sum[u], sum[p] + diff);
+          } else {
+            count[u] += count[p];
+            sum[u] += sum[p] + separate_product(count[p], diff);
+          }
+        }
+        layer += mode == TieMode::mean ? sum[u] / count[u] : sum[u];
+        max_count = std::max(max_count, count[u]);
+      }
+      if (mode == TieMode::mean && max_count > std::ldexp(1.0, 512)) {
+        for (const std::size_t u : next) {
+          count[u] *= std::ldexp(1.0, -512);
+          sum[u] *= std::ldexp(1.0, -512);
+        }
+      }
+      rows[s].push_back(layer);
+      reached += next.size();
+      level = next;
+    }
+    if (reached < N) t.connected = false;
+  }
+  for (std::size_t s = 0; s < N; ++s) {
+    t.values.insert(t.values.end(), rows[s].begin(), rows[s].end());
+    t.row_offsets[s + 1] = static_cast<std::int64_t>(t.values.size());
+    t.diameter = std::max(t.diameter, static_cast<std::int32_t>(rows[s].size()));
+  }
+  return t;
+}
+
+/// Bit for bit, including the signs of zeros (infinities and NaNs compare by their bits too).
+bool same_bits(const cge::DegreeSumTable& a, const cge::DegreeSumTable& b) {
+  if (a.num_nodes != b.num_nodes || a.diameter != b.diameter || a.connected != b.connected ||
+      a.row_offsets != b.row_offsets || a.values.size() != b.values.size()) {
+    return false;
+  }
+  for (std::size_t i = 0; i < a.values.size(); ++i) {
+    std::uint64_t x = 0, y = 0;
+    std::memcpy(&x, &a.values[i], sizeof x);
+    std::memcpy(&y, &b.values[i], sizeof y);
+    if (x != y) return false;
+  }
+  return true;
+}
+
+SmallGraph star_of_cliques(int cliques, int size) {
+  // A hub joined to every node of several cliques: degrees from size to cliques * size.
+  SmallGraph g{"star-of-cliques", 1 + cliques * size, {}};
+  for (int c = 0; c < cliques; ++c) {
+    const int base = 1 + c * size;
+    for (int i = 0; i < size; ++i) {
+      g.edges.push_back({0, base + i});
+      for (int j = i + 1; j < size; ++j) g.edges.push_back({base + i, base + j});
+    }
+  }
+  return g;
+}
+
+/// Frame-like graphs: what GraphBuilder makes of random points (mean degree about 8).
+SmallGraph geometric_graph(int n, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> ux(0.0, 640.0), uy(0.0, 480.0);
+  std::vector<Eigen::Vector2d> points;
+  for (int i = 0; i < n; ++i) points.emplace_back(ux(rng), uy(rng));
+  cge::GraphBuilderSettings<double> bs;
+  bs.dense_patch_threshold = 1 << 30;
+  bs.radius_fraction_of_diagonal = std::sqrt(6.0 * 640.0 * 480.0 / (3.14159265358979 * n)) / 800.0;
+  const cge::Graph<double> built = cge::GraphBuilder<double>(bs).build(cge::ImageRegion<double>{}, points);
+  SmallGraph g{"geometric" + std::to_string(n), n, {}};
+  for (const auto& e : built.edges()) g.edges.push_back({e.u, e.v});
+  return g;
+}
+
+/// A grid (with king's moves: also the diagonals) with pendant leaves on a regular pattern of
+/// nodes: grid-many shortest paths (about C(rows + cols, rows) between corners; a node has up to
+/// three predecessors with king's moves) and degree differences of 1 to 8 (leaves add no shortcut).
+SmallGraph decorated_grid(int rows, int cols, bool king) {
+  SmallGraph g = grid_graph(rows, cols);
+  g.name = std::string("decorated ") + (king ? "king " : "") + g.name;
+  if (king) {
+    for (int r = 0; r + 1 < rows; ++r) {
+      for (int c = 0; c < cols; ++c) {
+        if (c + 1 < cols) g.edges.push_back({r * cols + c, (r + 1) * cols + c + 1});
+        if (c > 0) g.edges.push_back({r * cols + c, (r + 1) * cols + c - 1});
+      }
+    }
+  }
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      if ((r * 7 + c * 3) % 5 != 0) continue;
+      for (int leaf = 0; leaf < 1 + (r + c) % 4; ++leaf) g.edges.push_back({r * cols + c, g.n++});
+    }
+  }
+  return g;
+}
+
+SmallGraph diamond_chain(int width, int diamonds) {
+  SmallGraph sg{"diamond chain", 1, {}};
+  for (int i = 0; i < diamonds; ++i) {
+    const int junction = sg.n - 1;
+    const int next = sg.n + width;
+    for (int m = 0; m < width; ++m) {
+      sg.edges.push_back({junction, sg.n + m});
+      sg.edges.push_back({sg.n + m, next});
+    }
+    sg.n += width + 1;
+  }
+  return sg;
+}
 
 }  // namespace
 
@@ -998,4 +1180,137 @@ TEST_CASE("softmax_entropy_bits works in the log domain", "[dde][numerics]") {
   CHECK_THROWS_AS(cge::softmax_entropy_bits({0.0, std::numeric_limits<double>::infinity()}), std::overflow_error);
   CHECK_THROWS_AS(cge::softmax_entropy_bits({0.0, -std::numeric_limits<double>::infinity()}), std::overflow_error);
   CHECK_THROWS_AS(cge::softmax_entropy_bits({std::numeric_limits<double>::quiet_NaN()}), std::overflow_error);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Kernels of the sweep
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("degree sum kernels: each available kernel agrees with path enumeration", "[dde][oracle][kernel]") {
+  if (!cge::degree_sum_kernel_available(cge::DegreeSumKernel::avx512)) {
+    WARN("skipped for the avx512 kernel: this CPU or build cannot run it; the portable kernel is checked");
+  }
+  std::vector<SmallGraph> zoo = small_graph_zoo(150);
+  std::mt19937 rng(515);
+  for (const int n : {63, 64, 65, 129}) zoo.push_back(random_connected(rng, n, n / 4, "block"));
+  for (const SmallGraph& sg : zoo) {
+    const cge::Graph<double> g = to_graph(sg);
+    for (const TieMode mode : kTieModes) {
+      const OracleTable expected = oracle_delta(sg, mode);
+      for (const cge::DegreeSumKernel kernel : available_kernels()) {
+        INFO("kernel " << kernel_name(kernel) << ", graph " << sg.name << ", ties " << tie_name(mode));
+        require_table_matches(cge::shortest_path_degree_sums(g, mode, kernel), expected);
+      }
+    }
+  }
+}
+
+TEST_CASE("degree sum kernels: bit for bit equal to an ordered scalar reference and to each other", "[dde][kernel]") {
+  std::mt19937 rng(2718);
+  std::vector<SmallGraph> graphs;
+  graphs.push_back(geometric_graph(300, 11));
+  graphs.push_back(geometric_graph(700, 12));  // 11 blocks of 64 sources
+  graphs.push_back(grid_graph(20, 20));        // ties everywhere
+  graphs.push_back(with_random_chords(rng, grid_graph(12, 15), 12));
+  // Many lanes per node and per predecessor: more than 16 and more than 32 of the 64.
+  graphs.push_back(complete_bipartite(3, 70));
+  graphs.push_back(relabel(complete_bipartite(20, 110), random_permutation(rng, 130)));
+  graphs.push_back(star_of_cliques(6, 9));  // degrees up to 54
+  {
+    SmallGraph g = disjoint_union(grid_graph(7, 9), disjoint_union(random_connected(rng, 90, 30, "d"), isolated(4)));
+    graphs.push_back(relabel(g, random_permutation(rng, g.n)));  // blocks straddle components
+  }
+  graphs.push_back(random_gnp(rng, 200, 0.012, "sparse"));  // many small components
+  // Path counts far beyond 2^53 with many significant bits (6^120, 7^100, about C(70, 35)), times
+  // degree differences that are not powers of two (10, 12, 3, 5, ...): products and sums round, so
+  // a fused multiply-add or another order of three or more predecessors shows (both checked by
+  // planting them in the kernel).
+  graphs.push_back(diamond_chain(6, 120));
+  graphs.push_back(diamond_chain(7, 100));
+  graphs.push_back(decorated_grid(36, 36, false));
+  graphs.push_back(decorated_grid(36, 36, true));
+  for (int i = 0; i < 20; ++i) {
+    graphs.push_back(random_gnp(rng, std::uniform_int_distribution<int>(2, 160)(rng),
+                                std::uniform_real_distribution<double>(0.01, 0.3)(rng), "r" + std::to_string(i)));
+  }
+  long long compared = 0;
+  for (const SmallGraph& sg : graphs) {
+    const cge::Graph<double> g = to_graph(sg);
+    for (const TieMode mode : kTieModes) {
+      const cge::DegreeSumTable expected = ordered_reference(sg, mode);
+      for (const cge::DegreeSumKernel kernel : available_kernels()) {
+        INFO("kernel " << kernel_name(kernel) << ", graph " << sg.name << " (" << sg.n << " nodes), ties "
+                       << tie_name(mode));
+        const cge::DegreeSumTable table = cge::shortest_path_degree_sums(g, mode, kernel);
+        REQUIRE(same_bits(table, expected));
+        compared += static_cast<long long>(table.values.size());
+      }
+    }
+  }
+  CHECK(compared > 100000);
+}
+
+TEST_CASE("degree sum kernels: graphs with float weights and DegreeDegreeEntropy<float>", "[dde][kernel]") {
+  std::mt19937 rng(31);
+  for (const SmallGraph& sg :
+       {geometric_graph(200, 5), grid_graph(9, 11), complete_bipartite(4, 40), random_gnp(rng, 120, 0.03, "f")}) {
+    std::vector<cge::Edge<float>> edges;
+    for (const auto& [u, v] : sg.edges) edges.push_back(cge::Edge<float>{u, v, 1.0f});
+    const cge::Graph<float> gf = cge::Graph<float>::from_edges(sg.n, edges, false);
+    for (const TieMode mode : kTieModes) {
+      const cge::DegreeSumTable expected = ordered_reference(sg, mode);
+      cge::DegreeDegreeSettings<float> settings;
+      settings.ties = mode;
+      const cge::DegreeDegreeEntropy<float> dde(settings);
+      const cge::DegreeDegreeResult<float> by_default = dde.compute(gf);
+      for (const cge::DegreeSumKernel kernel : available_kernels()) {
+        INFO("kernel " << kernel_name(kernel) << ", graph " << sg.name << ", ties " << tie_name(mode));
+        const cge::DegreeSumTable table = cge::shortest_path_degree_sums(gf, mode, kernel);
+        REQUIRE(same_bits(table, expected));
+        const cge::DegreeDegreeResult<float> r = dde.from_table(table);
+        REQUIRE(r.exponents == by_default.exponents);
+        REQUIRE(r.entropy_bits == by_default.entropy_bits);
+        REQUIRE(r.information_index == by_default.information_index);
+      }
+    }
+  }
+}
+
+TEST_CASE("degree sum kernels: huge path counts (overflow, exact rescaling) behave the same",
+          "[dde][kernel][numerics]") {
+  // 8^345 = 2^1035 shortest paths: TieMode::all overflows to inf (and the entropy reports it),
+  // TieMode::mean rescales whole levels by 2^-512, TieMode::min needs no counts.
+  const SmallGraph sg = diamond_chain(8, 345);
+  const cge::Graph<double> g = to_graph(sg);
+  for (const TieMode mode : {TieMode::mean, TieMode::min}) {
+    const cge::DegreeSumTable expected = ordered_reference(sg, mode);
+    for (const cge::DegreeSumKernel kernel : available_kernels()) {
+      INFO("kernel " << kernel_name(kernel) << ", ties " << tie_name(mode));
+      REQUIRE(same_bits(cge::shortest_path_degree_sums(g, mode, kernel), expected));
+    }
+  }
+  cge::DegreeDegreeSettings<double> all;
+  all.ties = TieMode::all;
+  for (const cge::DegreeSumKernel kernel : available_kernels()) {
+    INFO("kernel " << kernel_name(kernel));
+    const cge::DegreeSumTable table = cge::shortest_path_degree_sums(g, TieMode::all, kernel);
+    CHECK_THROWS_AS(cge::DegreeDegreeEntropy<double>(all).from_table(table), std::overflow_error);
+  }
+}
+
+TEST_CASE("degree sum kernels: availability and an explicit request that cannot run", "[dde][kernel][errors]") {
+  CHECK(cge::degree_sum_kernel_available(cge::DegreeSumKernel::automatic));
+  CHECK(cge::degree_sum_kernel_available(cge::DegreeSumKernel::portable));
+  const cge::Graph<double> g = to_graph(path_graph(4));
+  if (cge::degree_sum_kernel_available(cge::DegreeSumKernel::avx512)) {
+    CHECK(same_bits(cge::shortest_path_degree_sums(g, TieMode::all, cge::DegreeSumKernel::avx512),
+                    cge::shortest_path_degree_sums(g, TieMode::all, cge::DegreeSumKernel::portable)));
+    WARN("skipped: the avx512 kernel runs here, so the error for an unavailable kernel is not exercised");
+  } else {
+    const std::string message = cge_test::invalid_argument_message(
+        [&] { cge::shortest_path_degree_sums(g, TieMode::all, cge::DegreeSumKernel::avx512); });
+    CHECK_THAT(message, Catch::Contains("avx512") && Catch::Contains("AVX-512"));
+  }
+  CHECK_THROWS_AS(cge::shortest_path_degree_sums(cge::Graph<double>{}, TieMode::all, cge::DegreeSumKernel::portable),
+                  std::invalid_argument);
 }

@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -38,6 +39,16 @@ using cge::NodeKind;
 
 using cge_test::invalid_argument_message;
 using cge_test::is_connected;
+
+/// The grid scan kernels this machine can run for Scalar coordinates.
+template <typename Scalar>
+std::vector<cge::GridScanKernel> available_scan_kernels() {
+  std::vector<cge::GridScanKernel> kernels{cge::GridScanKernel::automatic, cge::GridScanKernel::portable};
+  if (cge::GridNeighborSearch<Scalar>::scan_kernel_available(cge::GridScanKernel::avx512)) {
+    kernels.push_back(cge::GridScanKernel::avx512);
+  }
+  return kernels;
+}
 
 Image make_image(double width, double height, P origin = P::Zero()) {
   Image img;
@@ -462,6 +473,16 @@ TEST_CASE("GraphBuilder matches the naive reference with both neighbour searches
     REQUIRE(GridBuilder(s, small_cells).build(img, kps, own, partner, inst) == grid);
     REQUIRE(GridBuilder(s, coarse).build(img, kps, own, partner, inst) == grid);
     REQUIRE(GridBuilder(s, few_cells).build(img, kps, own, partner, inst) == grid);
+    // Every scan kernel this machine runs, also with fine cells (queries of more rows than the
+    // AVX-512 scan takes at once fall back to the portable loop).
+    for (const cge::GridScanKernel kernel : available_scan_kernels<double>()) {
+      INFO("scan kernel " << static_cast<int>(kernel));
+      cge::GridNeighborSearch<double> ns;
+      ns.scan_kernel = kernel;
+      REQUIRE(GridBuilder(s, ns).build(img, kps, own, partner, inst) == grid);
+      ns.cell_size_factor = 0.3;
+      REQUIRE(GridBuilder(s, ns).build(img, kps, own, partner, inst) == grid);
+    }
 
     // What the trials exercised.
     const double R = GridBuilder(s).base_radius(img);
@@ -988,5 +1009,101 @@ TEST_CASE("GraphBuilder rejects invalid input with a message naming the problem"
     nodes.positions = {P(1, 1), P(2, 2)};
     nodes.kinds = {NodeKind::feature};
     CHECK_THAT(invalid_argument_message([&] { builder.build_edges(img, nodes); }), Catch::Contains("FrameNodes"));
+  }
+}
+
+TEST_CASE("GridNeighborSearch scan kernels report the same points and distances", "[builder][oracle][kernel]") {
+  // Direct check of the policy contract: every point within the radius but the query, once, with
+  // d2 = squared_distance(query, point); float and double coordinates, radii hitting exact
+  // lattice distances, queries near the border and beyond the point set.
+  std::mt19937 rng(777);
+  const auto check = [&](auto scalar_tag) {
+    using S = decltype(scalar_tag);
+    using Pt = Eigen::Matrix<S, 2, 1>;
+    std::vector<Pt> pts;
+    for (int i = 0; i < 400; ++i) {
+      if (i % 2) {
+        pts.emplace_back(static_cast<S>(std::uniform_real_distribution<double>(0, 640)(rng)),
+                         static_cast<S>(std::uniform_real_distribution<double>(0, 480)(rng)));
+      } else {  // lattice of 10 px: many distances of exactly 10, 20, 30 ...
+        pts.emplace_back(static_cast<S>(10 * std::uniform_int_distribution<int>(0, 63)(rng)),
+                         static_cast<S>(10 * std::uniform_int_distribution<int>(0, 47)(rng)));
+      }
+    }
+    for (const S radius : {S(10), S(20), S(30), S(47.5), S(100), S(900)}) {
+      std::vector<std::vector<std::pair<std::int32_t, S>>> expected(pts.size());
+      for (std::size_t q = 0; q < pts.size(); ++q) {
+        for (std::size_t j = 0; j < pts.size(); ++j) {
+          if (j != q && cge::within_radius(pts[q], pts[j], radius)) {
+            expected[q].push_back({static_cast<std::int32_t>(j), cge::squared_distance(pts[q], pts[j])});
+          }
+        }
+      }
+      for (const cge::GridScanKernel kernel : available_scan_kernels<S>()) {
+        INFO("radius " << radius << ", kernel " << static_cast<int>(kernel) << ", float "
+                       << (sizeof(S) == sizeof(float)));
+        cge::GridNeighborSearch<S> grid;
+        grid.scan_kernel = kernel;
+        grid.build(pts, S(10));
+        for (std::size_t q = 0; q < pts.size(); ++q) {
+          std::vector<std::pair<std::int32_t, S>> got;
+          grid.for_each_within(static_cast<std::int32_t>(q), radius, [&](std::int32_t j, S d2) {
+            got.push_back({j, d2});
+          });
+          std::sort(got.begin(), got.end());
+          REQUIRE(got == expected[q]);
+        }
+      }
+    }
+  };
+  check(double{});
+  check(float{});
+}
+
+TEST_CASE("GraphBuilder with float coordinates: every scan kernel gives the brute-force graph",
+          "[builder][oracle][kernel]") {
+  std::mt19937 rng(4321);
+  using PF = Eigen::Vector2f;
+  cge::ImageRegion<float> img;
+  img.width_px = 640;
+  img.height_px = 480;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<PF> kps;
+    const int n = std::uniform_int_distribution<int>(1, 600)(rng);
+    for (int i = 0; i < n; ++i) {
+      kps.emplace_back(static_cast<float>(std::uniform_real_distribution<double>(0, 640)(rng)),
+                       static_cast<float>(std::uniform_real_distribution<double>(0, 480)(rng)));
+    }
+    cge::GraphBuilderSettings<float> s;
+    s.dense_patch_threshold = trial % 2 ? 15 : 1 << 30;
+    s.radius_fraction_of_diagonal = trial % 3 ? 0.03f : 0.05f;
+    const cge::Graph<float> brute = cge::GraphBuilder<float, cge::BruteForceNeighborSearch<float>>(s).build(img, kps);
+    for (const cge::GridScanKernel kernel : available_scan_kernels<float>()) {
+      INFO("trial " << trial << ", kernel " << static_cast<int>(kernel));
+      cge::GridNeighborSearch<float> ns;
+      ns.scan_kernel = kernel;
+      REQUIRE(cge::GraphBuilder<float>(s, ns).build(img, kps) == brute);
+    }
+  }
+}
+
+TEST_CASE("GridNeighborSearch: scan kernel availability and an explicit request that cannot run",
+          "[builder][kernel][errors]") {
+  CHECK(cge::GridNeighborSearch<double>::scan_kernel_available(cge::GridScanKernel::automatic));
+  CHECK(cge::GridNeighborSearch<double>::scan_kernel_available(cge::GridScanKernel::portable));
+  // No vector kernel for long double coordinates: asking for one is an error, automatic falls back.
+  CHECK_FALSE(cge::GridNeighborSearch<long double>::scan_kernel_available(cge::GridScanKernel::avx512));
+  cge::GridNeighborSearch<long double> wide;
+  wide.scan_kernel = cge::GridScanKernel::avx512;
+  const std::vector<Eigen::Matrix<long double, 2, 1>> pts{{0.0L, 0.0L}, {1.0L, 0.0L}};
+  CHECK_THAT(invalid_argument_message([&] { wide.build(pts, 1.0L); }), Catch::Contains("avx512"));
+  wide.scan_kernel = cge::GridScanKernel::automatic;
+  CHECK_NOTHROW(wide.build(pts, 1.0L));
+  if (!cge::GridNeighborSearch<double>::scan_kernel_available(cge::GridScanKernel::avx512)) {
+    cge::GridNeighborSearch<double> ns;
+    ns.scan_kernel = cge::GridScanKernel::avx512;
+    const std::vector<P> dpts{P(0, 0), P(1, 0)};
+    CHECK_THAT(invalid_argument_message([&] { ns.build(dpts, 1.0); }), Catch::Contains("AVX-512"));
+    WARN("skipped: no AVX-512 here, the avx512 scan kernel is not exercised");
   }
 }

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <iterator>
 #include <limits>
 #include <memory>
@@ -22,7 +23,6 @@
 
 #include <Eigen/Core>
 
-#include "cge/core/bits.hpp"
 #include "cge/core/concepts.hpp"
 #include "cge/core/image_region.hpp"
 #include "cge/core/mask.hpp"
@@ -100,6 +100,12 @@ struct NodeRecord {
   NodeKind kind;
 };
 
+/// True for ranges with a size() member (std::vector, std::array, ...).
+template <typename T, typename = void>
+struct HasSize : std::false_type {};
+template <typename T>
+struct HasSize<T, decltype(void(std::declval<const T&>().size()))> : std::true_type {};
+
 /// Grows v to at least n elements without ever shrinking it, so a reused buffer is zero-filled
 /// only the first time it reaches a size.
 template <typename T>
@@ -128,12 +134,13 @@ struct GraphBuilderWorkspace {
   NeighborSearch search;
   std::vector<Scalar> last_rr;
   std::vector<std::int32_t> centres;
-  std::vector<std::uint64_t> next_centres;
+  std::vector<std::uint8_t> next_centre;
   detail::EdgeConstruction construction;
   // Canonical CSR.
   std::vector<std::int32_t> fill;
-  std::vector<std::uint64_t> by_target;
-  std::vector<std::uint8_t> slot_round;
+  std::vector<std::int32_t> start_u;
+  std::unique_ptr<detail::EdgeConstruction::NewEdge[]> by_v;
+  std::size_t by_v_capacity = 0;
 };
 
 template <typename Scalar = double, typename NeighborSearch = GridNeighborSearch<Scalar>>
@@ -245,6 +252,12 @@ class GraphBuilder {
     std::vector<std::int32_t>& stable_per_patch = ws.stable_per_patch;
     patch_of.clear();
     stable.clear();
+    // Reserve once where the count is cheap to know: growing by doubling copies, and touches
+    // twice the memory, which a fresh build pays for in page faults.
+    if constexpr (detail::HasSize<Keypoints>::value) {
+      stable.reserve(keypoints.size());
+      patch_of.reserve(keypoints.size());
+    }
     stable_per_patch.assign(static_cast<std::size_t>(patch_count), 0);
     const Scalar patch_w = image.width_px / static_cast<Scalar>(settings.patch_cols);
     const Scalar patch_h = image.height_px / static_cast<Scalar>(settings.patch_rows);
@@ -279,6 +292,8 @@ class GraphBuilder {
     FrameNodes<Scalar>& nodes = ws.nodes;
     nodes.positions.clear();
     nodes.kinds.clear();
+    nodes.positions.reserve(stable.size() + static_cast<std::size_t>(patch_count) + instances.size());
+    nodes.kinds.reserve(nodes.positions.capacity());
     for (int patch = 0; patch < patch_count; ++patch) {
       if (stable_per_patch[static_cast<std::size_t>(patch)] > settings.dense_patch_threshold) {
         const int pc = patch % settings.patch_cols;
@@ -438,54 +453,83 @@ class GraphBuilder {
     }
     out.connected[static_cast<std::size_t>(v0)] = 1;
 
-    // Next round's centres as a node bitmap: reading it word by word gives them in canonical
+    // Next round's centres as one flag byte per node (a bitmap would chain its read-modify-write
+    // updates through one word for neighbouring hits); reading it in order gives them in canonical
     // (ascending) order without a sort.
-    std::vector<std::int32_t>& centres = ws.centres;
-    centres.assign(1, v0);
-    std::vector<std::uint64_t>& next_centres = ws.next_centres;
-    next_centres.assign((static_cast<std::size_t>(n) + 63) / 64, 0);
-    for (int round = 1; !centres.empty() && round <= settings.max_rounds; ++round) {
+    std::int32_t* centres = detail::at_least(ws.centres, static_cast<std::size_t>(n));
+    centres[0] = v0;
+    std::int32_t centre_count = 1;
+    std::uint8_t* next_centre = detail::at_least(ws.next_centre, static_cast<std::size_t>(n));
+    std::fill(next_centre, next_centre + n, std::uint8_t(0));
+    // The hot loop works on local copies: stores through the byte arrays may alias any member, so
+    // members would be reloaded after every store.
+    std::uint8_t* connected = out.connected.data();
+    const Scalar* joined_rr = last_rr.data();
+    for (int round = 1; centre_count > 0 && round <= settings.max_rounds; ++round) {
       const bool capped = round >= settings.first_capped_round;
       const std::uint8_t tag = static_cast<std::uint8_t>(std::min(round, 255));
-      for (const std::int32_t c : centres) {
+      for (std::int32_t next = 0; next < centre_count; ++next) {
+        const std::int32_t c = centres[next];
         Scalar r = radius;  // 2^(t-1) R for attempt t, capped from first_capped_round on
         for (;;) {
           if (capped) r = std::min(r, cap);
-          const std::size_t edges_before = out.edge_count;
           out.reserve_more(static_cast<std::size_t>(n));  // a query yields at most n - 1 edges
+          detail::EdgeConstruction::NewEdge* edges = out.edges.get();
+          const std::size_t edges_before = out.edge_count;
+          std::size_t edge_count = edges_before;
           // Branch-free appends: "already joined" holds about half the time, a branch on it
           // would mispredict constantly. Each write lands in a free slot and the counter
           // advances only when it counts.
           search.for_each_within(c, r, [&](std::int32_t j, Scalar d2) {
             const std::size_t sj = static_cast<std::size_t>(j);
-            const bool fresh = !(d2 <= last_rr[sj]);  // not joined during j's turn
-            out.edges[out.edge_count] = detail::EdgeConstruction::NewEdge{c < j ? c : j, c < j ? j : c, tag};
-            out.edge_count += static_cast<std::size_t>(fresh);
-            const bool first_join = fresh & (out.connected[sj] == 0);
-            next_centres[sj >> 6] |= static_cast<std::uint64_t>(first_join) << (sj & 63);
-            out.connected[sj] = static_cast<std::uint8_t>(out.connected[sj] | static_cast<std::uint8_t>(fresh));
+            const bool fresh = !(d2 <= joined_rr[sj]);  // not joined during j's turn
+            edges[edge_count] = detail::EdgeConstruction::NewEdge{c < j ? c : j, c < j ? j : c, tag};
+            edge_count += static_cast<std::size_t>(fresh);
+            const std::uint8_t was = connected[sj];
+            next_centre[sj] = static_cast<std::uint8_t>(next_centre[sj] | (fresh & (was == 0)));
+            connected[sj] = static_cast<std::uint8_t>(was | static_cast<std::uint8_t>(fresh));
           });
-          const bool created = out.edge_count > edges_before;
+          out.edge_count = edge_count;
+          const bool created = edge_count > edges_before;
           const bool stop = created || (capped && r >= cap) || r >= span;
           if (stop) break;  // success; nothing new within the cap; or every node was in reach
           r *= 2;
         }
         last_rr[static_cast<std::size_t>(c)] = r * r;
       }
-      centres.clear();
-      for (std::size_t w = 0; w < next_centres.size(); ++w) {
-        for (std::uint64_t bits = next_centres[w]; bits; bits &= bits - 1) {
-          centres.push_back(static_cast<std::int32_t>(w * 64 + static_cast<std::size_t>(detail::lowest_bit(bits))));
-        }
-        next_centres[w] = 0;
-      }
+      centre_count = collect_flags(next_centre, n, centres);
     }
+  }
+
+  /// Writes the indices of the non-zero flags to `out` in ascending order, clears the flags and
+  /// returns how many there were. Skips eight clear flags at a time; no branch per flag.
+  static std::int32_t collect_flags(std::uint8_t* flags, std::int32_t n, std::int32_t* out) {
+    std::int32_t count = 0;
+    std::int32_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, flags + i, sizeof word);
+      if (!word) continue;
+      for (std::int32_t k = i; k < i + 8; ++k) {
+        out[count] = k;
+        count += flags[k] != 0;
+      }
+      std::memset(flags + i, 0, 8);
+    }
+    for (; i < n; ++i) {
+      out[count] = i;
+      count += flags[i] != 0;
+      flags[i] = 0;
+    }
+    return count;
   }
 
   /// Joins never-connected nodes, nearest first, each to its nearest node already in the graph
   /// (ties: smaller distance, then lower stray index, then lower target index). Prim-like, exact.
   static void join_strays(const std::vector<Point>& pts, detail::EdgeConstruction& out) {
     const std::int32_t n = static_cast<std::int32_t>(pts.size());
+    // Usually the rounds reach every node: then there is nothing to do (and nothing to allocate).
+    if (std::find(out.connected.begin(), out.connected.end(), std::uint8_t(0)) == out.connected.end()) return;
     std::vector<std::int32_t> strays;
     std::vector<std::int32_t> members;
     for (std::int32_t i = 0; i < n; ++i) (out.connected[static_cast<std::size_t>(i)] ? members : strays).push_back(i);
@@ -521,65 +565,82 @@ class GraphBuilder {
   }
 
   /// Canonical graph from the edges in creation order without a comparison sort (whose
-  /// unpredictable branches cost more than the copies): the arcs are bucketed by target node,
-  /// then appended to their source's row in ascending target order, so every CSR row comes out
-  /// sorted; one sweep then emits the edges in (u, v) order. Both scatters use the same degree
-  /// counts, as a node's number of incoming arcs equals its degree.
+  /// unpredictable branches cost more than the copies): a counting sort by v, then a stable one
+  /// by u, writes the edges in (u, v) order straight into the graph; the CSR rows then fill in
+  /// ascending order as in Graph::build_csr (smaller neighbours from the edges by u, larger ones
+  /// from each node's own run). No branch depends on the data.
+  /// The counting and the first scatter run over two halves of the edges at once: the edges of
+  /// one query share an endpoint, and one stream would wait on each counter it just incremented.
+  /// Their order within a v bucket does not matter, as the (u, v) pairs are distinct.
   static void to_graph(Workspace& ws, Graph<Scalar>& g) {
     using NewEdge = detail::EdgeConstruction::NewEdge;
     FrameNodes<Scalar>& nodes = ws.nodes;
     const std::int32_t n = static_cast<std::int32_t>(nodes.positions.size());
+    const std::size_t nn = static_cast<std::size_t>(n);
     const std::size_t m = ws.construction.edge_count;
+    const std::size_t half = m / 2;
     const NewEdge* created = ws.construction.edges.get();
     g.num_nodes_ = n;
     g.weighted_ = true;
+    // Bucket starts by v and by u (counts first, shifted by one).
+    std::int32_t* start_v = detail::at_least(ws.fill, nn + 1);
+    std::int32_t* start_u = detail::at_least(ws.start_u, nn + 1);
+    std::fill(start_v, start_v + nn + 1, 0);
+    std::fill(start_u, start_u + nn + 1, 0);
+    for (std::size_t k = 0; k < half; ++k) {
+      const NewEdge& a = created[k];
+      const NewEdge& b = created[half + k];
+      ++start_v[static_cast<std::size_t>(a.v) + 1];
+      ++start_u[static_cast<std::size_t>(a.u) + 1];
+      ++start_v[static_cast<std::size_t>(b.v) + 1];
+      ++start_u[static_cast<std::size_t>(b.u) + 1];
+    }
+    if (m % 2) {
+      ++start_v[static_cast<std::size_t>(created[m - 1].v) + 1];
+      ++start_u[static_cast<std::size_t>(created[m - 1].u) + 1];
+    }
     std::vector<std::int32_t>& offsets = g.offsets_;
-    offsets.assign(static_cast<std::size_t>(n) + 1, 0);
-    for (std::size_t k = 0; k < m; ++k) {
-      ++offsets[static_cast<std::size_t>(created[k].u) + 1];
-      ++offsets[static_cast<std::size_t>(created[k].v) + 1];
+    offsets.resize(nn + 1);
+    offsets[0] = 0;
+    for (std::size_t x = 0; x < nn; ++x) {
+      offsets[x + 1] = offsets[x] + start_u[x + 1] + start_v[x + 1];  // degree = as u + as v
+      start_v[x + 1] += start_v[x];
+      start_u[x + 1] += start_u[x];
     }
-    for (std::int32_t v = 0; v < n; ++v)
-      offsets[static_cast<std::size_t>(v) + 1] += offsets[static_cast<std::size_t>(v)];
-
-    // Arcs bucketed by target: (source << 8) | round.
-    std::uint64_t* by_target = detail::at_least(ws.by_target, 2 * m);
-    std::vector<std::int32_t>& fill = ws.fill;
-    fill.assign(offsets.begin(), offsets.end() - 1);
-    for (std::size_t k = 0; k < m; ++k) {
-      const NewEdge& e = created[k];
-      by_target[static_cast<std::size_t>(fill[static_cast<std::size_t>(e.v)]++)] =
-          (static_cast<std::uint64_t>(e.u) << 8) | e.round;
-      by_target[static_cast<std::size_t>(fill[static_cast<std::size_t>(e.u)]++)] =
-          (static_cast<std::uint64_t>(e.v) << 8) | e.round;
+    if (ws.by_v_capacity < m) {  // uninitialised storage: every slot is written before it is read
+      ws.by_v.reset(new NewEdge[m]);
+      ws.by_v_capacity = m;
     }
-    // Rows in ascending target order.
+    NewEdge* by_v = ws.by_v.get();
+    for (std::size_t k = 0; k < half; ++k) {
+      const NewEdge& a = created[k];
+      const NewEdge& b = created[half + k];
+      by_v[static_cast<std::size_t>(start_v[a.v]++)] = a;
+      by_v[static_cast<std::size_t>(start_v[b.v]++)] = b;
+    }
+    if (m % 2) by_v[static_cast<std::size_t>(start_v[created[m - 1].v]++)] = created[m - 1];
+    // Stable by u: (u, v) order, with the pixel lengths. Afterwards start_u[x] is the end of x's run.
+    g.edges_.resize(m);
+    g.edge_rounds_.resize(m);
+    Edge<Scalar>* edges = g.edges_.data();
+    std::uint8_t* rounds = g.edge_rounds_.data();
+    const Point* pts = nodes.positions.data();
+    for (std::size_t k = 0; k < m; ++k) {
+      const NewEdge& e = by_v[k];
+      const std::size_t at = static_cast<std::size_t>(start_u[e.u]++);
+      edges[at] = Edge<Scalar>{e.u, e.v, std::sqrt(squared_distance(pts[e.u], pts[e.v]))};
+      rounds[at] = e.round;
+    }
+    // CSR rows in ascending order: the smaller neighbours of x (edges (u, x), ascending u) first,
+    // then its larger ones, which are x's run of edges shifted to the end of its row.
     g.adjacency_.resize(2 * m);
-    std::uint8_t* slot_round = detail::at_least(ws.slot_round, 2 * m);
-    std::copy(offsets.begin(), offsets.end() - 1, fill.begin());
-    for (std::int32_t target = 0; target < n; ++target) {
-      for (std::int32_t k = offsets[static_cast<std::size_t>(target)];
-           k < offsets[static_cast<std::size_t>(target) + 1]; ++k) {
-        const std::uint64_t arc = by_target[static_cast<std::size_t>(k)];
-        const std::size_t at = static_cast<std::size_t>(fill[static_cast<std::size_t>(arc >> 8)]++);
-        g.adjacency_[at] = target;
-        slot_round[at] = static_cast<std::uint8_t>(arc & 0xffu);
-      }
-    }
-    // Edges (u < v) in (u, v) order: the upper part of each sorted row.
-    g.edges_.clear();
-    g.edge_rounds_.clear();
-    g.edges_.reserve(m);
-    g.edge_rounds_.reserve(m);
-    const std::vector<Point>& pts = nodes.positions;
-    for (std::int32_t u = 0; u < n; ++u) {
-      for (std::int32_t k = offsets[static_cast<std::size_t>(u)]; k < offsets[static_cast<std::size_t>(u) + 1]; ++k) {
-        const std::int32_t v = g.adjacency_[static_cast<std::size_t>(k)];
-        if (v < u) continue;
-        g.edges_.push_back(Edge<Scalar>{
-            u, v, std::sqrt(squared_distance(pts[static_cast<std::size_t>(u)], pts[static_cast<std::size_t>(v)]))});
-        g.edge_rounds_.push_back(slot_round[static_cast<std::size_t>(k)]);
-      }
+    std::int32_t* adjacency = g.adjacency_.data();
+    std::int32_t* fill = start_v;
+    std::copy(offsets.begin(), offsets.end() - 1, fill);
+    for (std::size_t k = 0; k < m; ++k) adjacency[fill[edges[k].v]++] = edges[k].u;
+    for (std::size_t k = 0; k < m; ++k) {
+      const std::size_t u = static_cast<std::size_t>(edges[k].u);
+      adjacency[k + static_cast<std::size_t>(offsets[u + 1] - start_u[u])] = edges[k].v;
     }
     // Swap rather than move, so both the graph and the workspace keep storage for the next build.
     g.positions_.swap(nodes.positions);

@@ -16,11 +16,23 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "cge/graph/grid_scan_avx512.hpp"
+
 namespace cge {
+
+/// Which implementation scans a grid query's candidates. Both report the same points with the
+/// same squared distances: the choice changes only the speed.
+enum class GridScanKernel {
+  automatic,  ///< AVX-512 where the CPU has it (double and float coordinates), else portable
+  portable,   ///< plain C++
+  avx512,     ///< x86-64 with AVX-512 F; build() throws std::invalid_argument where it cannot run
+};
 
 /// The one membership test of every neighbour search: squared Euclidean distance <= radius^2,
 /// computed the same way everywhere so that all policies agree to the last bit.
@@ -74,8 +86,21 @@ class GridNeighborSearch {
   Scalar cell_size_factor = Scalar(1);
   /// Upper bound on the number of cells, so that a tiny radius cannot allocate a huge grid.
   std::int64_t max_cells = std::int64_t(1) << 20;
+  /// Implementation of the candidate scan (same results, different speed).
+  GridScanKernel scan_kernel = GridScanKernel::automatic;
+
+  /// True when `kernel` can scan Scalar coordinates here (automatic and portable always can).
+  static bool scan_kernel_available(GridScanKernel kernel) {
+    return kernel != GridScanKernel::avx512 || (kSimdScalar && detail::avx512_grid_scan_supported());
+  }
 
   void build(const std::vector<Point>& points, Scalar typical_radius) {
+    if (!scan_kernel_available(scan_kernel)) {
+      throw std::invalid_argument(
+          "GridNeighborSearch: the avx512 scan needs an x86-64 CPU with AVX-512 F, a GCC or Clang build, and "
+          "float or double coordinates");
+    }
+    use_avx512_ = kSimdScalar && scan_kernel != GridScanKernel::portable && detail::avx512_grid_scan_supported();
     const std::size_t n = points.size();
     cols_ = rows_ = 0;
     if (n == 0) return;
@@ -122,8 +147,8 @@ class GridNeighborSearch {
       ys_[slot] = points[i].y();
     }
     points_ = &points;
-    hit_slot_.resize(n);
-    hit_d2_.resize(n);
+    hit_member_.resize(n + detail::kGridScanPadding);
+    hit_d2_.resize(n + detail::kGridScanPadding);
   }
 
   template <typename Visit>
@@ -143,6 +168,24 @@ class GridNeighborSearch {
     // Compact the hits of all rows without a branch per candidate (the test is taken about half
     // the time, so a branch would mispredict constantly), then visit them in one loop.
     std::size_t hits = 0;
+#if CGE_GRID_SCAN_HAVE_AVX512
+    if constexpr (kSimdScalar) {
+      if (use_avx512_ && r1 - r0 < kMaxRuns) {
+        std::int32_t begin[kMaxRuns], end[kMaxRuns];
+        const int runs = static_cast<int>(r1 - r0 + 1);
+        for (int i = 0; i < runs; ++i) {
+          // Cells of a row are contiguous, so one run covers columns c0..c1.
+          const std::size_t row_base = static_cast<std::size_t>((r0 + i) * cols_);
+          begin[i] = cell_start_[row_base + static_cast<std::size_t>(c0)];
+          end[i] = cell_start_[row_base + static_cast<std::size_t>(c1) + 1];
+        }
+        hits = detail::grid_scan_avx512(xs_.data(), ys_.data(), members_.data(), begin, end, runs, qx, qy, rr, query,
+                                        hit_member_.data(), hit_d2_.data());
+        for (std::size_t h = 0; h < hits; ++h) visit(hit_member_[h], hit_d2_[h]);
+        return;
+      }
+    }
+#endif
     for (std::int64_t r = r0; r <= r1; ++r) {
       const std::size_t row_base = static_cast<std::size_t>(r * cols_);
       // Cells of a row are contiguous, so one run covers columns c0..c1.
@@ -153,12 +196,13 @@ class GridNeighborSearch {
         const Scalar dx = qx - xs_[static_cast<std::size_t>(k)];
         const Scalar dy = qy - ys_[static_cast<std::size_t>(k)];
         const Scalar d2 = dx * dx + dy * dy;
-        hit_slot_[hits] = k;
+        const std::int32_t j = members_[static_cast<std::size_t>(k)];
+        hit_member_[hits] = j;
         hit_d2_[hits] = d2;
-        hits += static_cast<std::size_t>((d2 <= rr) & (members_[static_cast<std::size_t>(k)] != query));
+        hits += static_cast<std::size_t>((d2 <= rr) & (j != query));
       }
     }
-    for (std::size_t h = 0; h < hits; ++h) visit(members_[static_cast<std::size_t>(hit_slot_[h])], hit_d2_[h]);
+    for (std::size_t h = 0; h < hits; ++h) visit(hit_member_[h], hit_d2_[h]);
   }
 
  private:
@@ -180,9 +224,12 @@ class GridNeighborSearch {
   std::vector<std::int32_t> cell_start_;
   std::vector<std::int32_t> members_;
   std::vector<Scalar> xs_, ys_;
-  // Scratch for one row run of a query. Mutable: a query changes no observable state, and
+  static constexpr bool kSimdScalar = std::is_same<Scalar, double>::value || std::is_same<Scalar, float>::value;
+  static constexpr std::int64_t kMaxRuns = 16;  // rows scanned by one AVX-512 call (more: portable)
+  bool use_avx512_ = false;
+  // Scratch for the hits of a query. Mutable: a query changes no observable state, and
   // GraphBuilder works on its own copy of the policy, so concurrent builds never share it.
-  mutable std::vector<std::int32_t> hit_slot_;
+  mutable std::vector<std::int32_t> hit_member_;
   mutable std::vector<Scalar> hit_d2_;
 };
 
