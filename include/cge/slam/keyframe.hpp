@@ -1,0 +1,57 @@
+#pragma once
+// Keyframe: what the reference pipeline keeps of a frame it selected as a keyframe, shared by the
+// tracker (which makes it), the loop closer (which scores and verifies it), the optimisers (which
+// move its pose) and the map builders (which back-project its static pixels).
+//
+// Conventions: poses are T_world_camera (maps camera coordinates to world coordinates), metres;
+// camera frame x right, y down, z forward (OpenCV/TUM). Per-keypoint vectors have one entry per
+// row of `descriptors`, in the same order.
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <cstdint>
+#include <vector>
+
+#include "cge/core/semantic_instance.hpp"
+#include "cge/frontend/feature_label.hpp"
+
+namespace cge {
+namespace slam {
+
+/// Pinhole intrinsics in pixels (no distortion: TUM RGB-D images are already undistorted).
+struct CameraIntrinsics {
+  double fx = 525.0;  ///< focal length along x, pixels
+  double fy = 525.0;  ///< focal length along y, pixels
+  double cx = 319.5;  ///< principal point x, pixels
+  double cy = 239.5;  ///< principal point y, pixels
+  int width = 640;    ///< image width, pixels
+  int height = 480;   ///< image height, pixels
+};
+
+struct Keyframe {
+  int id = -1;            ///< 0, 1, 2, ... in creation order; also the index in the map's keyframe list
+  int frame_index = -1;   ///< index of the frame in the sequence
+  double timestamp_s = 0; ///< the frame's timestamp, seconds
+
+  /// Current estimate; updated in place by pose-graph optimisation and bundle adjustment.
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
+
+  // ---- features (all detected keypoints, dynamic ones included, so the graph builder sees the same
+  //      point set the filter saw; use `labels` to pick the static ones) --------------------------------
+  std::vector<cv::KeyPoint> keypoints;           ///< pixel positions, octave, angle
+  cv::Mat descriptors;                           ///< CV_8UC1, one 32-byte ORB row per keypoint
+  std::vector<FeatureLabel> labels;              ///< static / dynamic_by_mask / dynamic_by_mad
+  std::vector<Eigen::Vector3d> points_camera_m;  ///< back-projected from depth; NaN where no valid depth
+  std::vector<std::int64_t> map_point_ids;       ///< the map point each keypoint observes, -1 if none
+
+  // ---- semantics ---------------------------------------------------------------------------------
+  std::vector<SemanticInstance<double>> instances;  ///< every segmented instance, dynamic flag set
+  cv::Mat dynamic_mask;  ///< CV_8UC1, 255 on pixels of dynamic instances (empty Mat: none)
+
+  // ---- images kept for the dense maps (may be empty when the caller does not build maps) ------------
+  cv::Mat bgr;              ///< CV_8UC3
+  cv::Mat depth_m;          ///< CV_32FC1 metres, 0 where invalid
+  cv::Mat class_labels;     ///< CV_16UC1: class id + 1 of the instance covering the pixel, 0 = none
+};
+
+}  // namespace slam
+}  // namespace cge
