@@ -17,16 +17,6 @@
 namespace cge {
 namespace slam {
 
-/// Pinhole intrinsics in pixels (no distortion: TUM RGB-D images are already undistorted).
-struct CameraIntrinsics {
-  double fx = 525.0;  ///< focal length along x, pixels
-  double fy = 525.0;  ///< focal length along y, pixels
-  double cx = 319.5;  ///< principal point x, pixels
-  double cy = 239.5;  ///< principal point y, pixels
-  int width = 640;    ///< image width, pixels
-  int height = 480;   ///< image height, pixels
-};
-
 struct Keyframe {
   int id = -1;            ///< 0, 1, 2, ... in creation order; also the index in the map's keyframe list
   int frame_index = -1;   ///< index of the frame in the sequence
