@@ -66,6 +66,9 @@ static_assert(!cge::Point2Like<UnadaptedKeypoint>);
 static_assert(cge::MaskLike<cge::BinaryMask> && cge::MaskLike<cge::NoMask> && cge::MaskLike<ForeignMask>);
 static_assert(!cge::MaskLike<UnadaptedKeypoint>);
 
+static_assert(cge::DepthImageLike<cge::FloatDepthImage>);
+static_assert(!cge::DepthImageLike<cge::BinaryMask> && !cge::DepthImageLike<UnadaptedKeypoint>);
+
 static_assert(cge::NeighborSearchPolicy<cge::GridNeighborSearch<double>, double>);
 static_assert(cge::NeighborSearchPolicy<cge::BruteForceNeighborSearch<float>, float>);
 static_assert(cge::NeighborSearchPolicy<CountingSearch, double>);

@@ -9,12 +9,14 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <random>
 #include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "cge/cge.hpp"
+#include "cge/frontend/keyframe_policy.hpp"
 
 namespace cge_test_instantiation {
 /// A custom coefficient function with a name, for CustomCoefficients<F>.
@@ -57,6 +59,10 @@ CGE_INSTANTIATE_ALL(float)
 CGE_INSTANTIATE_ALL(double)
 template struct cge::CustomCoefficients<cge_test_instantiation::HalfPower>;
 template struct cge::CustomCoefficients<cge_test_instantiation::CoefficientFunction>;
+template class cge::DepthMADFilter<std::mt19937_64>;
+template class cge::DepthMADFilter<std::mt19937>;
+template struct cge::DynamicInstance<cge::BinaryMask>;
+template struct cge::DynamicInstance<cge::NoMask>;
 
 #undef CGE_INSTANTIATE_ALL
 
@@ -75,6 +81,7 @@ struct Run {
   S edge_entropy = 0;
   S similarity = 0;
   std::vector<double> exponents;
+  std::vector<cge::FeatureLabel> depth_mad_labels;
 
   Run() {
     const Point a(S(1), S(2));
@@ -182,6 +189,23 @@ struct Run {
     cge::CGESimilarity<S, cge::BruteForceNeighborSearch<S>> sim_brute;
     sim_brute.graph_builder.settings = settings;
     REQUIRE(sim_brute.score(image, cur, cand).similarity == score.similarity);
+
+    // Dynamic-feature elimination: keypoints of this scalar type, both engines.
+    cge::FloatDepthImage depth(640, 480, 3.0f);
+    for (int y = 100; y < 200; ++y)
+      for (int x = 100; x < 200; ++x) depth.at(x, y) = 1.0f + 0.001f * static_cast<float>(x + y - 200);
+    const std::vector<cge::DynamicInstance<cge::BinaryMask>> dynamic{
+        cge::dynamic_instance(mask, cge::PixelBox{90, 90, 130, 130}, 0)};
+    cge::DepthMADFilter<> mad;
+    mad.engine.seed(5);
+    const cge::DepthMADResult labelled = mad.filter(eigen_kps, depth, dynamic);
+    REQUIRE(labelled.labels.size() == eigen_kps.size());
+    REQUIRE(labelled.instances.at(0).mad_test_applied);
+    depth_mad_labels = labelled.labels;
+    cge::DepthMADFilter<std::mt19937> mad32(cge::DepthMADSettings{}, std::mt19937(5));
+    REQUIRE(mad32.filter(array_kps, depth, dynamic).labels.size() == array_kps.size());
+    const std::vector<cge::DynamicInstance<cge::NoMask>> none;
+    REQUIRE(mad.filter(pair_kps, depth, none).static_count == static_cast<int>(pair_kps.size()));
   }
 };
 
@@ -208,4 +232,69 @@ TEST_CASE("every template instantiates and runs for float and double alike", "[i
   REQUIRE(d.index_brute == d.index_grid);
   REQUIRE(f.edge_entropy == Approx(d.edge_entropy).epsilon(1e-6));
   REQUIRE(f.similarity == Approx(d.similarity).epsilon(1e-5));
+  REQUIRE(f.depth_mad_labels == d.depth_mad_labels);  // integer keypoints: the same pixels
+}
+
+// Keyframe selection (cge/frontend): every class template for float and double, and one run of
+// each policy and free function template; float and double must take the same decisions on
+// integer-valued input.
+#define CGE_INSTANTIATE_KEYFRAME(S)                 \
+  template struct cge::PatchGrid<S>;                \
+  template struct cge::FrameSummary<S>;             \
+  template struct cge::KeyframeMeasures<S>;         \
+  template struct cge::KeyframeDecision<S>;         \
+  template struct cge::PatchKeyframeSettings<S>;    \
+  template class cge::PatchKeyframeSelector<S>;     \
+  template struct cge::OrbSlam2KeyframeSettings<S>; \
+  template class cge::OrbSlam2KeyframePolicy<S>;    \
+  template class cge::KeyframePolicy<S>;
+
+CGE_INSTANTIATE_KEYFRAME(float)
+CGE_INSTANTIATE_KEYFRAME(double)
+#undef CGE_INSTANTIATE_KEYFRAME
+
+namespace {
+
+/// Decisions (rule, keyframe id) of both policies on a fixed integer-valued sequence.
+template <typename S>
+std::vector<std::pair<int, std::int64_t>> keyframe_run() {
+  using Point = Eigen::Matrix<S, 2, 1>;
+  const cge::ImageRegion<S> image;
+  const cge::PatchGrid<S> grid = cge::PatchKeyframeSelector<S>().grid(image);
+  REQUIRE(cge::dense_patch_mean(grid, std::vector<int>(100, 0), 3) == Point(S(320), S(240)));
+  REQUIRE(cge::semantic_centroid(std::vector<Point>{Point(S(2), S(4))}).value() == Point(S(2), S(4)));
+  std::vector<std::pair<int, std::int64_t>> out;
+  cge::KeyframePolicy<S> patch(cge::KeyframePolicyKind::patch);
+  cge::KeyframePolicy<S> orb(cge::KeyframePolicyKind::orbslam2);
+  for (int t = 0; t < 60; ++t) {
+    std::vector<std::array<S, 2>> kps;
+    for (int i = 0; i < 400; ++i) {
+      kps.push_back({S((i * 37 + t * t * 3) % 640), S((i * 53 + (i * i) % 97 + t * 5) % 480)});
+    }
+    std::vector<cge::SemanticInstance<S>> instances(static_cast<std::size_t>(t % 7 < 4 ? 1 : 3));
+    for (auto& inst : instances) inst.centre_px = Point(S(100 + 4 * t), S(200));
+    const cge::FrameSummary<S> summary = cge::make_frame_summary<S>(t, grid, kps, instances, 60 + (t * 29) % 300);
+    REQUIRE(summary.patch_counts == cge::count_patch_features(grid, kps));
+    const cge::KeyframeDecision<S> a = patch.step(summary);
+    const cge::KeyframeDecision<S> b = orb.step(summary);
+    out.emplace_back(static_cast<int>(a.rule), a.keyframe_id);
+    out.emplace_back(static_cast<int>(b.rule), b.keyframe_id);
+  }
+  const cge::KeyframeDecision<S> last = patch.flush();
+  out.emplace_back(static_cast<int>(last.rule), last.keyframe_id);
+  patch.reset();
+  orb.reset();
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("keyframe policies instantiate and decide alike for float and double", "[instantiation][keyframe]") {
+  const auto f = keyframe_run<float>();
+  const auto d = keyframe_run<double>();
+  REQUIRE(f == d);
+  // Not vacuous: both policies inserted keyframes after the first frame.
+  int inserted = 0;
+  for (std::size_t i = 2; i < d.size(); ++i) inserted += d[i].second != cge::kNoFrame ? 1 : 0;
+  REQUIRE(inserted >= 4);
 }

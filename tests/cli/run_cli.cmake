@@ -50,14 +50,23 @@ if(NOT EXIT EQUAL 0)
   endif()
 endif()
 
-# One list element per line of stdout (the tool's output holds no ';').
+# One list element per line of stdout (the tool's output holds no ';'). Square brackets would
+# join the lines between them into one element (CMake's list syntax), so they are stored as
+# placeholders and restored line by line (restore_brackets).
 string(REGEX REPLACE "\n$" "" out_lines "${out}")
+string(REPLACE "[" "<cge-lsb>" out_lines "${out_lines}")
+string(REPLACE "]" "<cge-rsb>" out_lines "${out_lines}")
 string(REPLACE "\n" ";" out_lines "${out_lines}")
+macro(restore_brackets var)
+  string(REPLACE "<cge-lsb>" "[" ${var} "${${var}}")
+  string(REPLACE "<cge-rsb>" "]" ${var} "${${var}}")
+endmacro()
 
 set(i 1)
 while(DEFINED STDOUT_${i})
   set(found FALSE)
   foreach(line IN LISTS out_lines)
+    restore_brackets(line)
     if(line MATCHES "^${STDOUT_${i}}$")
       set(found TRUE)
       break()
@@ -72,6 +81,7 @@ endwhile()
 set(i 1)
 while(DEFINED STDOUT_NOT_${i})
   foreach(line IN LISTS out_lines)
+    restore_brackets(line)
     if(line MATCHES "^${STDOUT_NOT_${i}}$")
       string(APPEND failures "  stdout line '${line}' matches '${STDOUT_NOT_${i}}' but must not\n")
     endif()

@@ -20,6 +20,7 @@
 
 #include "cge/core/mask.hpp"
 #include "cge/core/point_traits.hpp"
+#include "cge/frontend/depth_image.hpp"
 
 namespace cge {
 
@@ -37,6 +38,14 @@ concept MaskLike = requires(const M& m, int col, int row) {
   { traits::Mask<M>::height(m) } -> std::convertible_to<int>;
   { traits::Mask<M>::is_set(m, col, row) } -> std::convertible_to<bool>;
   { traits::Mask<M>::empty(m) } -> std::convertible_to<bool>;
+};
+
+/// A depth image type adapted by cge::traits::DepthImage (see cge/frontend/depth_image.hpp).
+template <typename D>
+concept DepthImageLike = requires(const D& d, int col, int row) {
+  { traits::DepthImage<D>::width(d) } -> std::convertible_to<int>;
+  { traits::DepthImage<D>::height(d) } -> std::convertible_to<int>;
+  { traits::DepthImage<D>::depth_m(d, col, row) } -> std::convertible_to<double>;
 };
 
 /// A neighbour-search policy for GraphBuilder<Scalar, NS> (see neighbor_search.hpp).

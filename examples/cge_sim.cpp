@@ -1,0 +1,270 @@
+// cge_sim: renders a synthetic dynamic RGB-D sequence from a preset and writes it in the TUM
+// layout with ground-truth and simulated-network instance masks. See docs/SIMULATION.md.
+//
+// Standard output: one summary line on success. Standard error: diagnostics, and a progress bar
+// when standard error is a terminal (nothing per frame otherwise, so logs stay clean).
+// Exit codes: 0 success; 1 the sequence could not be made or written (a file that cannot be
+// written, no renderer in this build); 2 bad usage or bad input (unknown preset, zero frames, a
+// non-empty output folder without --force, a setting out of range).
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <deque>
+#include <exception>
+#include <future>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+
+#include "cge/segmentation/coco_classes.hpp"
+#include "cge/sim/frame_source.hpp"
+#include "cge/sim/segmentation_error_model.hpp"
+#include "cge/sim/tum_writer.hpp"
+
+#include "cge/sim/presets.hpp"
+#include "cge/sim/renderer.hpp"
+
+#ifndef CGE_VERSION_STRING
+#define CGE_VERSION_STRING "unknown"
+#endif
+
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;
+constexpr int kExitUsage = 2;
+constexpr const char* kProgram = "cge_sim";
+constexpr int kProgressBarWidth = 40;  // characters between the brackets
+// Frames encoded at the same time while the next one renders: two keep two cores busy when the
+// renderer takes less time than an encoding; each frame in flight holds ~3 MB.
+constexpr int kFramesInFlight = 2;
+
+bool progress_line_open = false;  // a progress bar is on the terminal without its newline yet
+
+/// A bad input or flag value, reported on stderr with exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Options {
+  std::string preset;
+  int frames = 0;
+  std::uint64_t seed = 0;
+  std::string out;
+  bool exact_masks = false;
+  std::string error_classes = "person";
+  cge::sim::SegmentationErrorSettings errors;
+  cge::sim::TumWriterSettings writer;
+};
+
+// ---- the renderer: the only part of this tool that knows it ------------------------------------
+
+std::vector<std::string> known_presets() { return cge::sim::preset_names(); }
+
+void check_preset(const std::string& name) {
+  const std::vector<std::string> names = known_presets();
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    throw UsageError("unknown preset '" + name + "' (known presets: " + list + ")");
+  }
+}
+
+std::unique_ptr<cge::sim::FrameSource> open_preset(const std::string& name, int frames, std::uint64_t seed) {
+  using Renderer = cge::sim::SequenceRenderer;
+  return std::make_unique<cge::sim::RendererFrameSource<Renderer>>(Renderer(cge::sim::make_preset(name, frames, seed)));
+}
+
+// ---- the rest ----------------------------------------------------------------------------------
+
+std::vector<int> parse_classes(const std::string& list, bool& all) {
+  all = false;
+  std::vector<int> ids;
+  std::size_t start = 0;
+  while (start <= list.size()) {
+    const std::size_t comma = std::min(list.find(',', start), list.size());
+    const std::string name = list.substr(start, comma - start);
+    start = comma + 1;
+    if (name == "all") {
+      all = true;
+      continue;
+    }
+    const auto id = cge::coco_class_id(name);
+    if (!id) throw UsageError("--error-classes: '" + name + "' is not a COCO class name (e.g. person, chair) or 'all'");
+    ids.push_back(*id);
+  }
+  return ids;
+}
+
+/// "[=====>     ]  12/300 frames" on one terminal line, redrawn in place.
+void draw_progress(int done, int total, double elapsed_s) {
+  const int filled = static_cast<int>(static_cast<long long>(kProgressBarWidth) * done / total);
+  std::string bar(static_cast<std::size_t>(kProgressBarWidth), ' ');
+  std::fill(bar.begin(), bar.begin() + filled, '=');
+  if (filled < kProgressBarWidth) bar[static_cast<std::size_t>(filled)] = '>';
+  std::fprintf(stderr, "\r%s: [%s] %d/%d frames  %.1f s", kProgram, bar.c_str(), done, total, elapsed_s);
+  progress_line_open = done < total;
+  if (!progress_line_open) std::fputc('\n', stderr);
+  std::fflush(stderr);
+}
+
+/// cge::sim::write_tum_sequence with the PNG encoding, most of a frame's time, on other threads:
+/// this thread renders frame i while up to kFramesInFlight earlier frames are being encoded, and
+/// commits each frame (checks, files) in frame order once its encoding is done. Encoding is a
+/// pure function of the frame and the files are written in order by this thread alone, so the
+/// bytes are those of the sequential writer; only the wall time differs. The library itself
+/// starts no threads.
+void write_overlapped(const cge::sim::FrameSource& source, const cge::sim::SegmentationErrorModel& model,
+                      const std::string& out, const cge::sim::TumWriterSettings& settings,
+                      const cge::sim::WriteProgress& progress) {
+  struct InFlight {
+    std::shared_ptr<const cge::sim::SimulatedFrame> frame;
+    std::future<cge::sim::EncodedFrame> encoded;
+  };
+  cge::sim::check_sequence(source, model);
+  const int n = source.frame_count();
+  const int level = settings.png_compression;
+  cge::sim::TumSequenceWriter writer(out, source.camera(), source.frame_rate_hz(), source.instances(), settings);
+  std::deque<InFlight> in_flight;  // after the writer: its futures are waited for first
+  int committed = 0;
+  const auto commit_oldest = [&] {
+    InFlight& oldest = in_flight.front();
+    writer.write_frame(oldest.frame->frame, oldest.frame->segmentation, oldest.encoded.get());
+    in_flight.pop_front();
+    if (progress) progress(++committed, n);
+  };
+  for (int i = 0; i < n; ++i) {
+    auto frame = std::make_shared<const cge::sim::SimulatedFrame>(cge::sim::simulate_frame(source, model, i));
+    std::future<cge::sim::EncodedFrame> encoded = std::async(std::launch::async, [frame, level] {
+      return cge::sim::encode_frame(frame->frame, frame->segmentation, level);
+    });
+    in_flight.push_back({std::move(frame), std::move(encoded)});
+    if (static_cast<int>(in_flight.size()) > kFramesInFlight) commit_oldest();
+  }
+  while (!in_flight.empty()) commit_oldest();
+  writer.finish(source.loops());
+}
+
+int run(Options opt) {
+  if (opt.frames < 1) throw UsageError("--frames must be at least 1, got " + std::to_string(opt.frames));
+  if (opt.out.empty()) throw UsageError("--out must name a folder");
+  if (opt.exact_masks) {
+    opt.errors = cge::sim::exact_segmentation();
+  } else {
+    opt.errors.affected_class_ids = parse_classes(opt.error_classes, opt.errors.affect_all_classes);
+  }
+  cge::sim::validate(opt.errors);
+  opt.writer.description = std::string(kProgram) + " --preset " + opt.preset + " --frames " +
+                           std::to_string(opt.frames) + " --seed " + std::to_string(opt.seed);
+  check_preset(opt.preset);
+  cge::sim::check_output_folder(opt.out, opt.writer.force);
+
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed_s = [&start] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  const std::unique_ptr<cge::sim::FrameSource> source = open_preset(opt.preset, opt.frames, opt.seed);
+  const cge::sim::SegmentationErrorModel model(source->instances(), opt.seed, opt.errors);
+  cge::sim::WriteProgress progress;
+  if (::isatty(::fileno(stderr))) progress = [&](int done, int total) { draw_progress(done, total, elapsed_s()); };
+  write_overlapped(*source, model, opt.out, opt.writer, progress);
+
+  std::printf("wrote %d frames of %s (seed %llu) to %s in %.1f s\n", source->frame_count(), opt.preset.c_str(),
+              static_cast<unsigned long long>(opt.seed), opt.out.c_str(), elapsed_s());
+  std::fflush(stdout);
+  if (std::ferror(stdout)) {
+    std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  CLI::App app{"Renders a synthetic dynamic RGB-D sequence (cge " CGE_VERSION_STRING
+               ") and writes it in the TUM layout:\nrgb/, depth/, rgb.txt, depth.txt, groundtruth.txt, "
+               "camera.yaml, loops.txt, masks/ (ground truth) and\nsegmentation/ (after the segmentation "
+               "error model). Same arguments, same bytes. See docs/SIMULATION.md.",
+               kProgram};
+  app.set_version_flag("--version", std::string(kProgram) + " " + CGE_VERSION_STRING);
+  app.add_option("--preset", opt.preset, "scenario, e.g. walking_xyz (--list-presets shows them)")->required();
+  app.add_option("--frames", opt.frames, "number of frames, >= 1")->required();
+  app.add_option("--seed", opt.seed, "seed of the scene and of the segmentation errors")->capture_default_str();
+  app.add_option("--out", opt.out, "output folder; must not exist or be empty, unless --force")->required();
+  app.add_flag("--force", opt.writer.force,
+               "write into a non-empty folder: overwrite the sequence's own files, delete nothing");
+  app.add_option("--png-compression", opt.writer.png_compression,
+                 "PNG compression: -1 OpenCV's fast path (default), or a zlib level 0 .. 9 (slower)")
+      ->check(CLI::Range(cge::sim::kPngFast, 9))
+      ->capture_default_str();
+  app.add_flag("--exact-masks", opt.exact_masks, "segmentation/ equal to masks/ (no segmentation errors)");
+  app.add_option("--mask-offset-px", opt.errors.boundary_offset_px,
+                 "boundary shift of affected masks, pixels: > 0 dilates, < 0 erodes")
+      ->capture_default_str();
+  app.add_option("--feet-probability", opt.errors.feet_loss_probability,
+                 "probability per instance and frame that the feet are lost")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--feet-fraction", opt.errors.feet_loss_fraction,
+                 "fraction of the mask height removed at the bottom when the feet are lost")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--miss-probability", opt.errors.miss_probability,
+                 "probability per instance and frame that an instance is missed")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--false-positive-probability", opt.errors.false_positive_probability,
+                 "probability per frame of one false-positive blob")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--error-classes", opt.error_classes,
+                 "comma-separated COCO class names that receive the errors, or 'all'")
+      ->capture_default_str();
+  // --list-presets works without the other options: it is handled as a callback that exits.
+  app.add_flag_callback(
+      "--list-presets",
+      [] {
+        for (const std::string& n : known_presets()) std::printf("%s\n", n.c_str());
+        throw CLI::Success();
+      },
+      "print the preset names and exit");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
+    return kExitUsage;
+  }
+
+  const auto end_progress_line = [] {
+    if (progress_line_open) std::fputc('\n', stderr);
+  };
+  try {
+    return run(opt);
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  } catch (const std::invalid_argument& e) {
+    end_progress_line();
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  } catch (const std::exception& e) {
+    end_progress_line();
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitFailure;
+  }
+}

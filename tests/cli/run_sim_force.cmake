@@ -1,0 +1,61 @@
+# Command-line test of cge_sim's output folder rules and determinism (needs the renderer):
+#   cmake -DEXE=<cge_sim> -DWORK=<a folder of this test's own in the build tree> -P run_sim_force.cmake
+# 1. a run into a fresh folder succeeds;
+# 2. a run into a folder holding a user's file is refused without --force and leaves it alone;
+# 3. with --force it writes the sequence and the user's file is still there, unchanged;
+# 4. both runs wrote the same bytes in every file of the sequence.
+cmake_minimum_required(VERSION 3.16)
+
+foreach(var EXE WORK)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "run_sim_force.cmake: ${var} is not set")
+  endif()
+endforeach()
+
+set(args --preset walking_xyz --frames 3 --seed 5)
+set(user_file "${WORK}/forced/user_notes.txt")
+file(REMOVE_RECURSE "${WORK}")  # this test's own folder from an earlier run
+file(MAKE_DIRECTORY "${WORK}/forced")
+file(WRITE "${user_file}" "keep me\n")
+
+function(run_sim expected_rc)
+  execute_process(COMMAND "${EXE}" ${args} ${ARGN} INPUT_FILE "${CMAKE_CURRENT_LIST_DIR}/empty.txt"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 300)
+  if(NOT "${rc}" STREQUAL "${expected_rc}")
+    message(FATAL_ERROR "cge_sim ${args} ${ARGN}: exit code ${rc}, expected ${expected_rc}\n"
+                        "--- stdout ---\n${out}--- stderr ---\n${err}")
+  endif()
+  set(last_stderr "${err}" PARENT_SCOPE)
+endfunction()
+
+run_sim(0 --out "${WORK}/fresh")
+run_sim(2 --out "${WORK}/forced")
+if(NOT last_stderr MATCHES "not empty")
+  message(FATAL_ERROR "the refusal does not say the folder is not empty: ${last_stderr}")
+endif()
+file(GLOB forced_files RELATIVE "${WORK}/forced" "${WORK}/forced/*")
+if(NOT forced_files STREQUAL "user_notes.txt")
+  message(FATAL_ERROR "a refused run changed the folder: ${forced_files}")
+endif()
+run_sim(0 --out "${WORK}/forced" --force)
+
+file(READ "${user_file}" kept)
+if(NOT kept STREQUAL "keep me\n")
+  message(FATAL_ERROR "--force changed or removed the user's file")
+endif()
+
+file(GLOB_RECURSE written RELATIVE "${WORK}/fresh" "${WORK}/fresh/*")
+list(LENGTH written count)
+if(count LESS 20)  # 4 images per frame and 8 text files
+  message(FATAL_ERROR "the fresh run wrote only ${count} files: ${written}")
+endif()
+foreach(name IN LISTS written)
+  file(SHA256 "${WORK}/fresh/${name}" a)
+  if(NOT EXISTS "${WORK}/forced/${name}")
+    message(FATAL_ERROR "the forced run did not write ${name}")
+  endif()
+  file(SHA256 "${WORK}/forced/${name}" b)
+  if(NOT a STREQUAL b)
+    message(FATAL_ERROR "${name} differs between two runs with the same arguments")
+  endif()
+endforeach()
