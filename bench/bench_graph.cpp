@@ -9,6 +9,7 @@
 #include "bench_data.hpp"
 #include "cge/entropy/degree_degree_entropy.hpp"
 #include "cge/entropy/shannon_edge_entropy.hpp"
+#include "cge/entropy/shortest_path_degree_sums.hpp"
 #include "cge/graph/graph_builder.hpp"
 #include "cge/graph/neighbor_search.hpp"
 
@@ -77,6 +78,29 @@ void BM_GraphBuilder_ReusedWorkspace(benchmark::State& state) {
 }
 BENCHMARK(BM_GraphBuilder_ReusedWorkspace)->Apply(rgg_sizes)->Unit(benchmark::kMicrosecond)->Complexity();
 
+/// The allocating grid build with each candidate-scan kernel (automatic is BM_GraphBuilder above).
+void BM_GraphBuilder_Scan(benchmark::State& state, cge::GridScanKernel kernel) {
+  const int n = static_cast<int>(state.range(0));
+  if (!cge::GridNeighborSearch<double>::scan_kernel_available(kernel)) {
+    state.SkipWithError("this CPU cannot run the scan kernel");
+    return;
+  }
+  cge::GridNeighborSearch<double> search;
+  search.scan_kernel = kernel;
+  const cge::GraphBuilder<double> builder(cge_bench::rgg_settings(n), search);
+  const auto& points = rgg_points(n);
+  const auto image = cge_bench::image_region();
+  for (auto _ : state) {
+    cge::Graph<double> g = builder.build(image, points);
+    benchmark::DoNotOptimize(g);
+  }
+  graph_counters(state, rgg_graph(n));
+}
+BENCHMARK_CAPTURE(BM_GraphBuilder_Scan, portable, cge::GridScanKernel::portable)
+    ->Arg(1000)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_GraphBuilder_Scan, avx512, cge::GridScanKernel::avx512)->Arg(1000)->Unit(benchmark::kMicrosecond);
+
 // ---- 2. DegreeDegreeEntropy::compute ----------------------------------------------------------------
 
 void BM_DegreeDegreeEntropy(benchmark::State& state, GraphFamily family) {
@@ -115,6 +139,35 @@ void BM_DegreeDegreeEntropy_Ties(benchmark::State& state, cge::TieMode ties) {
 }
 BENCHMARK_CAPTURE(BM_DegreeDegreeEntropy_Ties, mean, cge::TieMode::mean)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_DegreeDegreeEntropy_Ties, min, cge::TieMode::min)->Arg(1000)->Unit(benchmark::kMicrosecond);
+
+/// The Delta table alone, with each kernel of the sweep (automatic is what compute() uses).
+void BM_DegreeSums(benchmark::State& state, GraphFamily family, cge::DegreeSumKernel kernel) {
+  const int n = static_cast<int>(state.range(0));
+  const cge::Graph<double>& g = family_graph(family, n);
+  if (!cge::degree_sum_kernel_available(kernel)) {
+    state.SkipWithError("this CPU cannot run the kernel");
+    return;
+  }
+  for (auto _ : state) {
+    cge::DegreeSumTable t = cge::shortest_path_degree_sums(g, cge::TieMode::all, kernel);
+    benchmark::DoNotOptimize(t);
+  }
+  graph_counters(state, g);
+}
+BENCHMARK_CAPTURE(BM_DegreeSums, builder_portable, GraphFamily::builder, cge::DegreeSumKernel::portable)
+    ->Arg(300)
+    ->Arg(1000)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_DegreeSums, builder_avx512, GraphFamily::builder, cge::DegreeSumKernel::avx512)
+    ->Arg(300)
+    ->Arg(1000)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_DegreeSums, disc_portable, GraphFamily::disc, cge::DegreeSumKernel::portable)
+    ->Arg(1000)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_DegreeSums, disc_avx512, GraphFamily::disc, cge::DegreeSumKernel::avx512)
+    ->Arg(1000)
+    ->Unit(benchmark::kMicrosecond);
 
 // ---- 3. Peers: all-pairs unweighted distances ---------------------------------------------------------
 

@@ -298,91 +298,102 @@ class CompactLaneDegreeSums {
     return here;
   }
 
-  /// N and S (or M) of u's lanes `here`, written at position `at` of the current level, 16
-  /// lanes at a time, 8 per register.
+  /// N and S (or M) of u's lanes `here`, written at position `at` of the current level, 8 or 16
+  /// lanes at a time (one or two registers).
   CGE_DEGREE_SUMS_AVX512_TARGET void accumulate(std::int32_t u, std::uint64_t here, int lanes_here, int preds,
                                                 std::int32_t at) {
     alignas(64) static constexpr std::uint8_t kLaneIds[64] = {
         0,  1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21,
         22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42, 43,
         44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 55, 56, 57, 58, 59, 60, 61, 62, 63};
-    std::uint8_t* lanes_of_u = values_current_.lane.data() + at;
-    _mm512_storeu_si512(lanes_of_u, _mm512_maskz_compress_epi8(here, _mm512_load_si512(kLaneIds)));
-    double* count_u = values_current_.count.data() + at;
-    double* sum_u = values_current_.sum.data() + at;
+    _mm512_storeu_si512(values_current_.lane.data() + at,
+                        _mm512_maskz_compress_epi8(here, _mm512_load_si512(kLaneIds)));
+    if (lanes_here <= 8) {
+      accumulate_window<1>(u, lanes_here, preds, at);
+    } else {
+      for (int q = 0; q < lanes_here; q += 16) accumulate_window<2>(u, lanes_here - q, preds, at + q);
+    }
+  }
+
+  /// One window of `Chunks` registers of 8 lanes: the lanes at positions at.. of the current level.
+  template <int Chunks>
+  CGE_DEGREE_SUMS_AVX512_TARGET void accumulate_window(std::int32_t u, int left, int preds, std::int32_t at) {
+    const std::uint8_t* lanes_of_u = values_current_.lane.data() + at;
     const double* count_previous = values_previous_.count.data();
     const double* sum_previous = values_previous_.sum.data();
     const __m512i one = _mm512_set1_epi64(1);
     const __m512i sixteen = _mm512_set1_epi64(16);
     const __m512d start = _mm512_set1_pd(Mode == TieMode::min ? std::numeric_limits<double>::infinity() : 0.0);
     const std::int32_t degree_u = degree_[static_cast<std::size_t>(u)];
-    for (int q = 0; q < lanes_here; q += 16) {
-      // Lanes q..q+15 of u: their ids, one bit each, and which of the 16 slots exist.
-      const int left = lanes_here - q;
-      const __mmask8 exists0 = static_cast<__mmask8>(left >= 8 ? 0xffu : (1u << left) - 1u);
-      const __mmask8 exists1 = static_cast<__mmask8>(left >= 16 ? 0xffu : left > 8 ? (1u << (left - 8)) - 1u : 0u);
+    // Per register: which slots exist, their lane ids as bits, and the bits below them.
+    __mmask8 exists[Chunks];
+    __m512i bit[Chunks], below[Chunks];
+    __m512d n[Chunks], s[Chunks];
+    for (int c = 0; c < Chunks; ++c) {
+      const int in_chunk = left - 8 * c;
+      exists[c] = static_cast<__mmask8>(in_chunk >= 8 ? 0xffu : in_chunk > 0 ? (1u << in_chunk) - 1u : 0u);
       // (The zero-masked forms, because the plain ones trip GCC's -Wmaybe-uninitialized.)
-      const __m512i id0 =
-          _mm512_maskz_cvtepu8_epi64(0xff, _mm_loadl_epi64(reinterpret_cast<const __m128i*>(lanes_of_u + q)));
-      const __m512i id1 =
-          _mm512_maskz_cvtepu8_epi64(0xff, _mm_loadl_epi64(reinterpret_cast<const __m128i*>(lanes_of_u + q + 8)));
-      const __m512i bit0 = _mm512_maskz_sllv_epi64(0xff, one, id0);
-      const __m512i bit1 = _mm512_maskz_sllv_epi64(0xff, one, id1);
-      const __m512i below0 = _mm512_sub_epi64(bit0, one);
-      const __m512i below1 = _mm512_sub_epi64(bit1, one);
-      __m512d n0 = _mm512_setzero_pd(), n1 = _mm512_setzero_pd(), s0 = start, s1 = start;
-      for (int j = 0; j < preds; ++j) {
-        const std::int32_t p = pred_node_[static_cast<std::size_t>(j)];
-        const std::uint64_t lanes_of_p = previous_[static_cast<std::size_t>(p)];
-        const __m512i p_lanes = _mm512_set1_epi64(static_cast<long long>(lanes_of_p));
-        const __m512i via_p = _mm512_set1_epi64(static_cast<long long>(pred_mask_[static_cast<std::size_t>(j)]));
-        const int degree_gap = degree_[static_cast<std::size_t>(p)] - degree_u;
-        const __m512d diff = _mm512_set1_pd(static_cast<double>(degree_gap < 0 ? -degree_gap : degree_gap));
-        // Slots whose lane has p as predecessor, and where p keeps that lane: its rank in p's mask.
-        __mmask8 todo0 = _mm512_mask_test_epi64_mask(exists0, via_p, bit0);
-        __mmask8 todo1 = _mm512_mask_test_epi64_mask(exists1, via_p, bit1);
-        __m512i rank0 = _mm512_popcnt_epi64(_mm512_and_si512(p_lanes, below0));
-        __m512i rank1 = _mm512_popcnt_epi64(_mm512_and_si512(p_lanes, below1));
-        const std::size_t base = static_cast<std::size_t>(offset_previous_[static_cast<std::size_t>(p)]);
-        const double* count_p = count_previous + base;
-        const double* sum_p = sum_previous + base;
-        const int lanes_p = static_cast<int>(_mm_popcnt_u64(lanes_of_p));
-        for (int window = 0;; window += 16) {  // p's values 16 at a time (one window nearly always)
-          const __mmask8 k0 = _mm512_mask_cmplt_epu64_mask(todo0, rank0, sixteen);
-          const __mmask8 k1 = _mm512_mask_cmplt_epu64_mask(todo1, rank1, sixteen);
-          const __m512d sum_lo = _mm512_loadu_pd(sum_p + window);
-          const __m512d sum_hi = _mm512_loadu_pd(sum_p + window + 8);
-          const __m512d sp0 = _mm512_permutex2var_pd(sum_lo, rank0, sum_hi);
-          const __m512d sp1 = _mm512_permutex2var_pd(sum_lo, rank1, sum_hi);
+      const __m512i id =
+          _mm512_maskz_cvtepu8_epi64(0xff, _mm_loadl_epi64(reinterpret_cast<const __m128i*>(lanes_of_u + 8 * c)));
+      bit[c] = _mm512_maskz_sllv_epi64(0xff, one, id);
+      below[c] = _mm512_sub_epi64(bit[c], one);
+      n[c] = _mm512_setzero_pd();
+      s[c] = start;
+    }
+    for (int j = 0; j < preds; ++j) {
+      const std::int32_t p = pred_node_[static_cast<std::size_t>(j)];
+      const std::uint64_t lanes_of_p = previous_[static_cast<std::size_t>(p)];
+      const __m512i p_lanes = _mm512_set1_epi64(static_cast<long long>(lanes_of_p));
+      const __m512i via_p = _mm512_set1_epi64(static_cast<long long>(pred_mask_[static_cast<std::size_t>(j)]));
+      const int degree_gap = degree_[static_cast<std::size_t>(p)] - degree_u;
+      const __m512d diff = _mm512_set1_pd(static_cast<double>(degree_gap < 0 ? -degree_gap : degree_gap));
+      // Slots whose lane has p as predecessor, and where p keeps that lane: its rank in p's mask.
+      __mmask8 todo[Chunks];
+      __m512i rank[Chunks];
+      for (int c = 0; c < Chunks; ++c) {
+        todo[c] = _mm512_mask_test_epi64_mask(exists[c], via_p, bit[c]);
+        rank[c] = _mm512_popcnt_epi64(_mm512_and_si512(p_lanes, below[c]));
+      }
+      const std::size_t base = static_cast<std::size_t>(offset_previous_[static_cast<std::size_t>(p)]);
+      const double* count_p = count_previous + base;
+      const double* sum_p = sum_previous + base;
+      const int lanes_p = static_cast<int>(_mm_popcnt_u64(lanes_of_p));
+      for (int window = 0;; window += 16) {  // p's values 16 at a time (one window nearly always)
+        const __m512d sum_lo = _mm512_loadu_pd(sum_p + window);
+        const __m512d sum_hi = _mm512_loadu_pd(sum_p + window + 8);
+        __m512d count_lo = _mm512_setzero_pd(), count_hi = _mm512_setzero_pd();
+        if (Mode != TieMode::min) {
+          count_lo = _mm512_loadu_pd(count_p + window);
+          count_hi = _mm512_loadu_pd(count_p + window + 8);
+        }
+        __mmask8 k[Chunks];
+        for (int c = 0; c < Chunks; ++c) {
+          k[c] = _mm512_mask_cmplt_epu64_mask(todo[c], rank[c], sixteen);
+          const __m512d sp = _mm512_permutex2var_pd(sum_lo, rank[c], sum_hi);
           if (Mode == TieMode::min) {
             // std::min(M_u, M_p + diff) keeps M_u unless the new value is smaller.
-            s0 = _mm512_mask_min_pd(s0, k0, _mm512_add_pd(sp0, diff), s0);
-            s1 = _mm512_mask_min_pd(s1, k1, _mm512_add_pd(sp1, diff), s1);
+            s[c] = _mm512_mask_min_pd(s[c], k[c], _mm512_add_pd(sp, diff), s[c]);
           } else {
-            const __m512d count_lo = _mm512_loadu_pd(count_p + window);
-            const __m512d count_hi = _mm512_loadu_pd(count_p + window + 8);
-            const __m512d np0 = _mm512_permutex2var_pd(count_lo, rank0, count_hi);
-            const __m512d np1 = _mm512_permutex2var_pd(count_lo, rank1, count_hi);
-            __m512d t0 = _mm512_maskz_mul_pd(k0, np0, diff);
-            __m512d t1 = _mm512_maskz_mul_pd(k1, np1, diff);
+            const __m512d np = _mm512_permutex2var_pd(count_lo, rank[c], count_hi);
+            __m512d t = _mm512_maskz_mul_pd(k[c], np, diff);
             // The product is rounded on its own, as in the portable kernel: no fused multiply-add.
-            __asm__("" : "+v"(t0), "+v"(t1));
-            n0 = _mm512_mask_add_pd(n0, k0, n0, np0);
-            n1 = _mm512_mask_add_pd(n1, k1, n1, np1);
-            s0 = _mm512_mask_add_pd(s0, k0, s0, _mm512_maskz_add_pd(k0, sp0, t0));
-            s1 = _mm512_mask_add_pd(s1, k1, s1, _mm512_maskz_add_pd(k1, sp1, t1));
+            __asm__("" : "+v"(t));
+            n[c] = _mm512_mask_add_pd(n[c], k[c], n[c], np);
+            s[c] = _mm512_mask_add_pd(s[c], k[c], s[c], _mm512_maskz_add_pd(k[c], sp, t));
           }
-          if (window + 16 >= lanes_p) break;
-          todo0 = static_cast<__mmask8>(todo0 & ~k0);
-          todo1 = static_cast<__mmask8>(todo1 & ~k1);
-          rank0 = _mm512_sub_epi64(rank0, sixteen);
-          rank1 = _mm512_sub_epi64(rank1, sixteen);
+        }
+        if (window + 16 >= lanes_p) break;
+        for (int c = 0; c < Chunks; ++c) {
+          todo[c] = static_cast<__mmask8>(todo[c] & ~k[c]);
+          rank[c] = _mm512_sub_epi64(rank[c], sixteen);
         }
       }
-      _mm512_storeu_pd(count_u + q, n0);
-      _mm512_storeu_pd(count_u + q + 8, n1);
-      _mm512_storeu_pd(sum_u + q, s0);
-      _mm512_storeu_pd(sum_u + q + 8, s1);
+    }
+    double* count_u = values_current_.count.data() + at;
+    double* sum_u = values_current_.sum.data() + at;
+    for (int c = 0; c < Chunks; ++c) {
+      _mm512_storeu_pd(count_u + 8 * c, n[c]);
+      _mm512_storeu_pd(sum_u + 8 * c, s[c]);
     }
   }
 
