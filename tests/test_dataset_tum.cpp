@@ -22,6 +22,7 @@
 #include "cge/sim/frame_source.hpp"
 #include "cge/sim/segmentation_error_model.hpp"
 #include "cge/sim/tum_writer.hpp"
+#include "dataset_test_support.hpp"
 #include "temp_dir.hpp"
 #include "test_support.hpp"
 
@@ -62,43 +63,6 @@ std::vector<cge::dataset::TimestampMatch> oracle_associate(const std::vector<dou
 
 bool equal_images(const cv::Mat& a, const cv::Mat& b) {
   return a.size() == b.size() && a.type() == b.type() && cv::countNonZero(a.reshape(1) != b.reshape(1)) == 0;
-}
-
-cge::sim::InstanceInfo instance(std::uint16_t id, int class_id, bool moving) {
-  cge::sim::InstanceInfo i;
-  i.id = id;
-  i.class_id = class_id;
-  i.moving = moving;
-  return i;
-}
-
-/// A small hand-made sequence: 40 x 30 pixels, random images, a moving camera, one person.
-cge::sim::InMemoryFrameSource tiny_sequence(int frames) {
-  cge::sim::InMemoryFrameSource s;
-  s.camera_model.width_px = 40;
-  s.camera_model.height_px = 30;
-  s.camera_model.fx_px = 41.5;
-  s.camera_model.fy_px = 42.0;
-  s.camera_model.cx_px = 19.5;
-  s.camera_model.cy_px = 14.5;
-  s.rate_hz = 30;
-  s.instance_table = {instance(1, 0, true)};
-  cv::RNG rng(11);
-  for (int i = 0; i < frames; ++i) {
-    cge::sim::RenderedFrame f;
-    f.index = i;
-    f.timestamp_s = 1305031102.175304 + i / 30.0;
-    f.T_world_camera = Eigen::Translation3d(0.2 * i, -0.1 * i, 1.0 + 0.05 * i) *
-                       Eigen::AngleAxisd(0.4 * i - 1.0, Eigen::Vector3d(0.3, -0.2, 1.0).normalized());
-    f.rgb = cv::Mat(30, 40, CV_8UC3);
-    rng.fill(f.rgb, cv::RNG::UNIFORM, 0, 256);
-    f.depth = cv::Mat(30, 40, CV_16UC1);
-    rng.fill(f.depth, cv::RNG::UNIFORM, 0, 30000);
-    f.instance_labels = cv::Mat(30, 40, CV_16UC1, cv::Scalar(0));
-    f.instance_labels(cv::Rect(2 + 2 * i, 5, 8, 20)).setTo(1);
-    s.frames.push_back(f);
-  }
-  return s;
 }
 
 /// A folder with valid 4 x 3 images: rgb/<t>.png and depth/<t>.png for the given stems.
@@ -201,7 +165,7 @@ TEST_CASE("Association: invalid arguments", "[dataset][association]") {
 // ---- a synthetic sequence read back --------------------------------------------------------------
 
 TEST_CASE("TumSequence: a cge::sim sequence reads back with its images and ground truth", "[dataset][tum_sequence]") {
-  const auto seq = tiny_sequence(5);
+  const auto seq = cge_test::tiny_sequence(5);
   cge::sim::SegmentationErrorModel model(seq.instances(), 3, cge::sim::exact_segmentation());
   TempDir tmp{"cge_test_dataset"};
   const fs::path dir = tmp.path() / "seq";
