@@ -312,7 +312,9 @@ TEST_CASE("TumSequence: every bad input names its file and line", "[dataset][tum
     write_text(dir / "groundtruth.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 x\n");
     CHECK_THAT(open(), Contains(gt + ":2") && Contains("qw"));
     write_text(dir / "groundtruth.txt", "1.0 0 0 0 0 0 0 1\n0.5 0 0 0 0 0 0 1\n");
-    CHECK_THAT(open(), Contains(gt + ":2") && Contains("must increase"));
+    CHECK_THAT(open(), Contains(gt + ":2") && Contains("must not decrease"));
+    write_text(dir / "groundtruth.txt", "1.0 0 0 0 0 0 0 1\n1.0 1 0 0 0 0 0 1\n");  // equal: both kept
+    CHECK(TumSequence(dir).ground_truth().size() == 2);
     write_text(dir / "groundtruth.txt", "1.0 0 0 0 0 0 0 2\n");
     CHECK_THAT(open(), Contains(gt + ":1") && Contains("norm"));
   }
@@ -370,5 +372,47 @@ TEST_CASE("TumSequence: real TUM fr3 walking_xyz frames (skipped when /work/shar
     CHECK(f.bgr.rows == 480);
     CHECK(f.depth.type() == CV_16UC1);
     CHECK(std::abs(f.depth_timestamp_s - f.rgb_timestamp_s) < 1e-4);
+  }
+}
+
+TEST_CASE("TumSequence: the official fr1_xyz and fr2_desk ground truth (skipped when /work/shared is absent)",
+          "[dataset][tum_sequence][real]") {
+  const fs::path dir = fs::path(CGE_SHARED_DIR) / "data" / "tum_trajectories";
+  for (const char* name : {"freiburg1_xyz-groundtruth.txt", "fr2_desk_groundtruth.txt"}) {
+    CAPTURE(name);
+    const fs::path file = dir / name;
+    if (!fs::is_regular_file(file)) {
+      WARN("skipped: " << file.string() << " not found");
+      continue;
+    }
+    TempDir tmp{"cge_test_dataset_gt"};
+    write_images(tmp.path(), {"1.0"});
+    write_text(tmp.path() / "rgb.txt", list({"1.0"}, "rgb"));
+    write_text(tmp.path() / "depth.txt", list({"1.0"}, "depth"));
+    fs::copy_file(file, tmp.path() / "groundtruth.txt");
+    const TumSequence s(tmp.path());
+
+    // Independent parse: every non-comment line, quaternion normalised here.
+    std::ifstream in(file);
+    std::vector<std::vector<double>> rows;
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream fields(line);
+      std::vector<double> v(8);
+      for (double& x : v) fields >> x;
+      rows.push_back(v);
+    }
+    REQUIRE(s.ground_truth().size() == rows.size());
+    double worst = 0;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const std::vector<double>& v = rows[i];
+      const Eigen::Quaterniond q = Eigen::Quaterniond(v[7], v[4], v[5], v[6]).normalized();
+      Eigen::Matrix4d expected = Eigen::Matrix4d::Identity();
+      expected.topLeftCorner<3, 3>() = q.toRotationMatrix();
+      expected.topRightCorner<3, 1>() = Eigen::Vector3d(v[1], v[2], v[3]);
+      CHECK(s.ground_truth()[i].timestamp_s == v[0]);
+      worst = std::max(worst, (s.ground_truth()[i].T_world_camera.matrix() - expected).cwiseAbs().maxCoeff());
+    }
+    CHECK(worst < 1e-12);
   }
 }

@@ -27,9 +27,11 @@ std::vector<GroundTruthPose> read_ground_truth(const std::filesystem::path& file
     static const char* const kNames[kFields] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
     double v[kFields];
     for (std::size_t k = 0; k < kFields; ++k) v[k] = parse_real(fields[k], where, kNames[k]);
-    if (!poses.empty() && !(v[0] > previous_s)) {
+    // Equal timestamps occur in TUM's own files (fr2_desk: two poses at 1311868229.5760, written
+    // with 4 decimals); both are kept. Decreasing ones are an error.
+    if (!poses.empty() && v[0] < previous_s) {
       throw std::invalid_argument(where + ": timestamp " + std::string(fields[0]) +
-                                  " does not come after the previous line's; timestamps must increase");
+                                  " comes before the previous line's; timestamps must not decrease");
     }
     Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // w, x, y, z
     const double norm = q.norm();

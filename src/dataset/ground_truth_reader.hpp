@@ -14,7 +14,8 @@ namespace detail {
 /// Parses `timestamp tx ty tz qx qy qz qw` lines ('#' comments and blank lines ignored) into poses,
 /// quaternions normalised. Throws std::invalid_argument "<file>:<line>: ..." for a line without 8
 /// fields, a number that does not parse, a quaternion whose norm is off 1 by more than
-/// quaternion_norm_tolerance, or a timestamp not greater than the previous one; naming the file
+/// quaternion_norm_tolerance, or a timestamp smaller than the previous one (equal
+/// ones are kept, in file order: TUM's fr2_desk has some); naming the file
 /// when it cannot be read.
 std::vector<GroundTruthPose> read_ground_truth(const std::filesystem::path& file, double quaternion_norm_tolerance);
 

@@ -100,7 +100,8 @@ class TumSequence {
   /// RGB entries without a depth partner (dropped by the association).
   int unassociated_rgb_count() const { return unassociated_rgb_; }
 
-  /// groundtruth.txt, in file order; empty when the file is absent.
+  /// groundtruth.txt, in file order (timestamps non-decreasing; a repeated timestamp keeps both
+  /// lines, as in TUM's fr2_desk); empty when the file is absent.
   const std::vector<GroundTruthPose>& ground_truth() const { return ground_truth_; }
   bool has_ground_truth() const { return !ground_truth_.empty(); }
 
