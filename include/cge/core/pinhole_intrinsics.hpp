@@ -1,7 +1,8 @@
 #pragma once
-// Pinhole intrinsics without distortion (TUM RGB-D images are already undistorted), with the two
-// maps every RGB-D component needs: projection of a camera-frame point and back-projection of a
-// pixel with its depth. Camera frame: x right, y down, z forward (OpenCV/TUM).
+// Pinhole intrinsics without distortion, with the two maps every RGB-D component needs: projection
+// of a camera-frame point and back-projection of a pixel with its depth. TUM fr3 images are
+// undistorted; fr1/fr2 keypoints are undistorted first (cge/dataset/orbslam2_settings.hpp).
+// Camera frame: x right, y down, z forward (OpenCV/TUM).
 #include <Eigen/Core>
 
 namespace cge {
