@@ -48,7 +48,8 @@ struct Options {
 
 bool is_image_name(const fs::path& p) {
   std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".ppm" || ext == ".pgm" ||
          ext == ".tif" || ext == ".tiff";
 }
@@ -121,7 +122,8 @@ int run(const Options& opt) {
     }
     source = opt.images_dir.empty() ? opt.list_file : opt.images_dir;
   }
-  if (opt.max_images > 0 && static_cast<int>(images.size()) > opt.max_images) images.resize(static_cast<std::size_t>(opt.max_images));
+  if (opt.max_images > 0 && static_cast<int>(images.size()) > opt.max_images)
+    images.resize(static_cast<std::size_t>(opt.max_images));
 
   // The same steps as cge::slam::train_vocabulary, unrolled to count the descriptors.
   std::vector<std::vector<cge::bow::BinaryDescriptor>> documents;
@@ -174,7 +176,9 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.add_option("--seed", opt.training.seed, "seed of the k-means++ draws")->capture_default_str();
-  app.add_option("--step", opt.step, "use every step-th image, >= 1")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--step", opt.step, "use every step-th image, >= 1")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--max-images", opt.max_images, "use at most this many images (0: all)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

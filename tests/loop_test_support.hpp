@@ -37,7 +37,8 @@ inline cge::PinholeIntrinsics<double> intrinsics_of(const cge::sim::PinholeCamer
 /// miss them too).
 constexpr int kMinInstancePixels = 200;
 
-inline cge::slam::Keyframe keyframe_from_frame(const cge::sim::RenderedFrame& frame, const cge::sim::PinholeCamera& camera,
+inline cge::slam::Keyframe keyframe_from_frame(const cge::sim::RenderedFrame& frame,
+                                               const cge::sim::PinholeCamera& camera,
                                                const std::vector<cge::sim::InstanceInfo>& instances, int id,
                                                int orb_features = 1000) {
   cge::slam::Keyframe kf;

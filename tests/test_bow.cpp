@@ -41,7 +41,8 @@ BinaryDescriptor flip_bits(BinaryDescriptor d, int flips, std::mt19937_64& rng) 
   std::vector<int> bits(256);
   for (int i = 0; i < 256; ++i) bits[static_cast<std::size_t>(i)] = i;
   for (int i = 0; i < flips; ++i) {
-    const std::size_t j = static_cast<std::size_t>(i) + static_cast<std::size_t>(rng() % static_cast<std::uint64_t>(256 - i));
+    const std::size_t j =
+        static_cast<std::size_t>(i) + static_cast<std::size_t>(rng() % static_cast<std::uint64_t>(256 - i));
     std::swap(bits[static_cast<std::size_t>(i)], bits[j]);
     const int b = bits[static_cast<std::size_t>(i)];
     d[static_cast<std::size_t>(b / 64)] ^= std::uint64_t{1} << (b % 64);
@@ -279,9 +280,7 @@ TEST_CASE("Vocabulary: save and load round trip, files not overwritten", "[bow]"
   const std::string path = dir.file("voc.txt");
   v.save_file(path);
   CHECK(Vocabulary::load_file(path) == v);
-  {
-    std::ofstream(dir.file("mine.txt")) << "user data\n";
-  }
+  { std::ofstream(dir.file("mine.txt")) << "user data\n"; }
   CHECK_THROWS_WITH(v.save_file(dir.file("mine.txt")), Catch::Contains("exists"));
   std::ifstream kept(dir.file("mine.txt"));
   std::string line;
@@ -318,15 +317,15 @@ TEST_CASE("Vocabulary: malformed files give errors naming the line", "[bow]") {
              Catch::Contains("vocab.txt:4") && Catch::Contains("not an earlier node"));
   CHECK_THAT(load_error(header + "0 0.5 " + hex + "\n0 0.5 " + hex + "\nextra\n"),
              Catch::Contains("vocab.txt:5") && Catch::Contains("unexpected content"));
-  CHECK_THAT(load_error("CGE_VOCABULARY 1\nbranching 2 depth 2 training_images 3 nodes 4\n0 0 " + hex + "\n0 0 " +
-                        hex + "\n0 0 " + hex + "\n"),
+  CHECK_THAT(load_error("CGE_VOCABULARY 1\nbranching 2 depth 2 training_images 3 nodes 4\n0 0 " + hex + "\n0 0 " + hex +
+                        "\n0 0 " + hex + "\n"),
              Catch::Contains("vocab.txt:5") && Catch::Contains("more than branching"));
-  CHECK_THAT(load_error("CGE_VOCABULARY 1\nbranching 2 depth 1 training_images 3 nodes 3\n0 0 " + hex + "\n1 0 " +
-                        hex + "\n"),
-             Catch::Contains("vocab.txt:4") && Catch::Contains("deeper than depth 1"));
-  CHECK_THAT(load_error("CGE_VOCABULARY 1\nbranching 2 depth 2 training_images 3 nodes 3\n0 1 " + hex + "\n1 0 " +
-                        hex + "\n"),
-             Catch::Contains("vocab.txt:3") && Catch::Contains("inner node 1"));
+  CHECK_THAT(
+      load_error("CGE_VOCABULARY 1\nbranching 2 depth 1 training_images 3 nodes 3\n0 0 " + hex + "\n1 0 " + hex + "\n"),
+      Catch::Contains("vocab.txt:4") && Catch::Contains("deeper than depth 1"));
+  CHECK_THAT(
+      load_error("CGE_VOCABULARY 1\nbranching 2 depth 2 training_images 3 nodes 3\n0 1 " + hex + "\n1 0 " + hex + "\n"),
+      Catch::Contains("vocab.txt:3") && Catch::Contains("inner node 1"));
 }
 
 TEST_CASE("Vocabulary: training is deterministic in the seed", "[bow]") {

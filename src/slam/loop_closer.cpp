@@ -140,6 +140,8 @@ LoopCloser::LoopCloser(std::unique_ptr<BowModel> model, const PinholeIntrinsics<
   image_.height_px = image_height_px;
   similarity_.settings = settings_.similarity;
   similarity_.graph_builder.settings = settings_.graph;
+  similarity_.degree_entropy.settings = settings_.degree_entropy;
+  similarity_.degree_entropy.scaling.kind = settings_.exponent_scaling;
 }
 
 LoopCloser::LoopCloser(bow::Vocabulary vocabulary, const PinholeIntrinsics<double>& camera, int image_width_px,
@@ -327,8 +329,13 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
     }
     return cge_of(id);
   };
+  // The gate of step 3: the BoW score in bow_only mode, S_sum otherwise (also in combined mode,
+  // whose product only ranks).
   const double threshold =
       settings_.scoring == LoopScoring::bow_only ? settings_.min_bow_score : settings_.min_cge_score;
+  auto gate_value = [&](int id) {
+    return settings_.scoring == LoopScoring::bow_only ? bow_score[static_cast<std::size_t>(id)] : cge_of(id);
+  };
 
   struct Scored {
     Group group;
@@ -369,7 +376,7 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
   std::vector<Group> next;
   int chosen_consistency = 0;
   for (std::size_t g = 0; g < groups.size(); ++g) {
-    if (!(groups[g].best_score >= threshold)) continue;
+    if (!(gate_value(groups[g].best) >= threshold)) continue;
     Group grp = groups[g].group;
     int previous = 0;
     for (const Group& old : consistent_groups_) {
@@ -385,7 +392,7 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
     next.push_back(std::move(grp));
   }
   consistent_groups_ = std::move(next);
-  if (!(chosen.best_score >= threshold)) {
+  if (!(gate_value(chosen.best) >= threshold)) {
     decision.reason = LoopReason::low_score;
     return finish();
   }
