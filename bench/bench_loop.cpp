@@ -64,11 +64,11 @@ const LoopBenchScene& loop_scene() {
 }
 
 /// One iteration = a fresh LoopCloser processing all 100 keyframes (the database grows to 100);
-/// items_per_second gives keyframes per second. Arg: 0 = cge scoring, 1 = bow_only.
+/// items_per_second gives keyframes per second. Arg: 0 = combined scoring (the default), 1 = bow_only.
 void BM_LoopCloserProcess100(benchmark::State& state) {
   const LoopBenchScene& s = loop_scene();
   cge::slam::LoopCloserSettings settings;
-  settings.scoring = state.range(0) == 0 ? cge::slam::LoopScoring::cge : cge::slam::LoopScoring::bow_only;
+  settings.scoring = state.range(0) == 0 ? cge::slam::LoopScoring::combined : cge::slam::LoopScoring::bow_only;
   int accepted = 0;
   for (auto _ : state) {
     cge::slam::LoopCloser closer(s.vocabulary, cge_test::intrinsics_of(s.spec.camera), s.spec.camera.width_px,

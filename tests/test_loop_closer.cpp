@@ -316,8 +316,8 @@ TEST_CASE("LoopCloser: deterministic, and both graph-stability modes run", "[loo
 }
 
 namespace {
-/// A BoW policy of the test's own: every earlier keyframe shares 10 words with score 0.5, except
-/// the ones the test marks; shows the LoopCloser takes any model honouring the contract.
+/// A BoW policy of the test's own that shares no word with anything: shows the LoopCloser takes
+/// any model honouring the contract (and calls add() once per keyframe).
 class ScriptedBowModel final : public cge::slam::BowModel {
  public:
   int adds = 0;
