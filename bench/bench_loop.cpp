@@ -87,3 +87,34 @@ void BM_LoopCloserProcess100(benchmark::State& state) {
 BENCHMARK(BM_LoopCloserProcess100)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3);
 
 }  // namespace
+
+namespace {
+
+/// One process() call for keyframe 99 with keyframes 0..98 in the database (their BoW entries and
+/// cached entropies made untimed beforehand): the cost of one new keyframe late in a sequence.
+/// Arg as above.
+void BM_LoopCloserProcessLast(benchmark::State& state) {
+  const LoopBenchScene& s = loop_scene();
+  cge::slam::LoopCloserSettings settings;
+  settings.scoring = state.range(0) == 0 ? cge::slam::LoopScoring::combined : cge::slam::LoopScoring::bow_only;
+  const auto& last = s.keyframes.back();
+  bool accepted = false;
+  for (auto _ : state) {
+    state.PauseTiming();
+    cge::slam::LoopCloser closer(s.vocabulary, cge_test::intrinsics_of(s.spec.camera), s.spec.camera.width_px,
+                                 s.spec.camera.height_px, settings);
+    cge_test::PoseCovisibilityView view(s.keyframes, 5, 60.0);
+    for (std::size_t i = 0; i + 1 < s.keyframes.size(); ++i) {
+      view.set_count(static_cast<int>(i) + 1);
+      closer.process(s.keyframes[i], view);
+    }
+    view.set_count(last.id + 1);
+    state.ResumeTiming();
+    accepted = closer.process(last, view).accepted;
+  }
+  state.counters["accepted"] = accepted ? 1 : 0;
+  state.SetLabel(cge::slam::to_string(settings.scoring));
+}
+BENCHMARK(BM_LoopCloserProcessLast)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3)->Repetitions(3);
+
+}  // namespace
