@@ -155,7 +155,9 @@ class BundleAdjuster {
     std::vector<bool> used_pose(n_poses, false), used_point(n_points, false);
     const ceres::Solver::Options options = settings.solver.options(/*sparse=*/true, /*schur=*/true);
     for (int round = 0; round < settings.rounds; ++round) {
-      ceres::Problem problem;
+      // One loss shared by every residual; it outlives the problem, which does not own it.
+      ceres::HuberLoss huber(settings.huber_delta > 0 ? settings.huber_delta : 1.0);  // any width when unused
+      ceres::Problem problem(problem_options());
       std::vector<bool> in_problem(n_poses, false);
       const bool robust = round < settings.robust_rounds && settings.huber_delta > 0;
       for (std::size_t k = 0; k < observations.size(); ++k) {
@@ -172,8 +174,8 @@ class BundleAdjuster {
         ceres::CostFunction* cost = std::isnan(o.depth_m)
                                         ? ReprojectionCost::create(pixel)
                                         : ReprojectionDepthCost::create({pixel, {o.depth_m, 1.0 / o.sigma_depth_m}});
-        problem.AddResidualBlock(cost, robust ? new ceres::HuberLoss(settings.huber_delta) : nullptr,
-                                 pose.q_xyzw.data(), pose.t.data(), points[o.point].data());
+        problem.AddResidualBlock(cost, robust ? &huber : nullptr, pose.q_xyzw.data(), pose.t.data(),
+                                 points[o.point].data());
       }
       if (problem.NumResidualBlocks() == 0) {
         if (round == 0) result.converged = true;  // nothing to optimise

@@ -88,15 +88,16 @@ class PoseGraphOptimiser {
     std::vector<bool> fixed(T_world_camera.size(), false);
     for (int f : fixed_nodes) fixed[f] = true;
 
-    ceres::Problem problem;
+    // One loss shared by every residual; it outlives the problem, which does not own it.
+    ceres::HuberLoss huber(settings.huber_delta > 0 ? settings.huber_delta : 1.0);  // any width when unused
+    ceres::Problem problem(problem_options());
     for (int i = 0; i < n; ++i) blocks[i].add_to(problem, fixed[i]);
     for (const PoseGraphEdge& e : edges) {
       RelativePoseCost cost;
       cost.q_a_b_measured = Eigen::Quaterniond(Eigen::Matrix3d(e.T_from_to.linear())).normalized();
       cost.t_a_b_measured = e.T_from_to.translation();
       cost.sqrt_information = Eigen::LLT<Eigen::Matrix<double, 6, 6>>(e.information).matrixU();
-      problem.AddResidualBlock(RelativePoseCost::create(cost),
-                               settings.huber_delta > 0 ? new ceres::HuberLoss(settings.huber_delta) : nullptr,
+      problem.AddResidualBlock(RelativePoseCost::create(cost), settings.huber_delta > 0 ? &huber : nullptr,
                                blocks[e.from].q_xyzw.data(), blocks[e.from].t.data(), blocks[e.to].q_xyzw.data(),
                                blocks[e.to].t.data());
     }

@@ -111,15 +111,16 @@ class PoseRefiner {
                                       std::to_string(settings.min_observations) + " needed");
         break;
       }
-      ceres::Problem problem;
+      // One loss shared by every residual; it outlives the problem, which does not own it.
+      ceres::HuberLoss huber(settings.huber_delta > 0 ? settings.huber_delta : 1.0);  // any width when unused
+      ceres::Problem problem(problem_options());
       pose.add_to(problem);
       const bool robust = round < settings.robust_rounds;
       for (std::size_t i = 0; i < n; ++i) {
         if (!result.inliers[i]) continue;
         const PoseObservation& o = observations[i];
         PoseOnlyReprojectionCost cost{intrinsics, o.point_world_m, o.pixel_px, 1.0 / o.sigma_px, settings.min_depth_m};
-        problem.AddResidualBlock(PoseOnlyReprojectionCost::create(cost),
-                                 robust ? new ceres::HuberLoss(settings.huber_delta) : nullptr, pose.q_xyzw.data(),
+        problem.AddResidualBlock(PoseOnlyReprojectionCost::create(cost), robust ? &huber : nullptr, pose.q_xyzw.data(),
                                  pose.t.data());
       }
       ceres::Solver::Summary summary;

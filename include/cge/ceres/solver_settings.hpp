@@ -56,4 +56,12 @@ struct CeresSolverSettings {
   }
 };
 
+/// Problem options of the cge optimisers: the problem owns cost functions and manifolds, not the
+/// loss function (one shared instance per solve, owned by the caller).
+inline ceres::Problem::Options problem_options() {
+  ceres::Problem::Options o;
+  o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  return o;
+}
+
 }  // namespace cge
