@@ -8,6 +8,7 @@
 #include <limits>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "ceres_test_scene.hpp"
@@ -203,4 +204,15 @@ TEST_CASE("PoseRefiner rejects invalid input with a message naming it", "[ceres]
     CHECK_THROWS_WITH(PoseRefiner(bad).refine(s.K, s.observations, s.T_world_camera),
                       Catch::Contains("max_iterations"));
   }
+}
+
+// Ceres' headers include glog, whose CHECK would silently replace Catch2's (this file includes
+// catch.hpp first); cge/ceres/ceres_headers.hpp restores it. Catch's CHECK reports through
+// Catch::AssertionHandler, glog's aborts through google::LogMessageFatal.
+#define CGE_TEST_STRINGIZE_EXPANDED(...) CGE_TEST_STRINGIZE(__VA_ARGS__)
+#define CGE_TEST_STRINGIZE(...) #__VA_ARGS__
+TEST_CASE("Including the Ceres adapters after catch.hpp keeps Catch2's CHECK", "[ceres]") {
+  const std::string expansion = CGE_TEST_STRINGIZE_EXPANDED(CHECK(true));
+  CHECK(expansion.find("AssertionHandler") != std::string::npos);
+  CHECK(expansion.find("google") == std::string::npos);
 }
