@@ -1,0 +1,283 @@
+// BundleAdjuster (cge/ceres/bundle_adjustment.hpp). Oracles: synthetic scenes with known poses and
+// points (noise-free data from a perturbed start must give back the truth), the cost at the truth
+// computed here independently (the optimum of noisy data must not be worse, and its RMS must sit at
+// the noise level), injected gross errors (flagged, nothing else), bit-identical repeated runs, and
+// invalid input naming what is wrong.
+#include "cge/ceres/bundle_adjustment.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "ceres_test_scene.hpp"
+
+namespace {
+
+using cge::BundleAdjuster;
+using cge::BundleAdjustmentResult;
+using cge::BundleAdjustmentSettings;
+using cge::BundleObservation;
+using cge_test::random_motion;
+using cge_test::rotation_error_rad;
+using cge_test::translation_error_m;
+using cge_test::uniform;
+
+struct BAScene {
+  cge::PinholeIntrinsics<double> K;
+  std::vector<Eigen::Isometry3d> T_world_camera;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<BundleObservation> observations;
+};
+
+/// Keyframes strung along x (0.3 m apart, small random rotations) looking at points 3..8 m ahead;
+/// every point observed (exactly) by every keyframe that sees it inside the image. With depth, every
+/// observation also carries its exact depth (sigma 1 cm).
+BAScene make_ba_scene(std::mt19937& rng, int keyframes, int points, bool with_depth) {
+  BAScene s;
+  for (int i = 0; i < keyframes; ++i) {
+    Eigen::Isometry3d T = random_motion(rng, uniform(rng, 0, 0.08), 0.0);
+    T.translation() = Eigen::Vector3d(0.3 * i, uniform(rng, -0.1, 0.1), uniform(rng, -0.1, 0.1));
+    s.T_world_camera.push_back(T);
+  }
+  const double span = 0.3 * (keyframes - 1);
+  for (int j = 0; j < points; ++j)
+    s.points.emplace_back(uniform(rng, -2, span + 2), uniform(rng, -1.5, 1.5), uniform(rng, 3, 8));
+  for (int i = 0; i < keyframes; ++i) {
+    const Eigen::Isometry3d T_camera_world = s.T_world_camera[i].inverse();
+    for (int j = 0; j < points; ++j) {
+      const Eigen::Vector3d p = T_camera_world * s.points[j];
+      const Eigen::Vector2d px = s.K.project(p);
+      if (p.z() <= 0 || px.x() < 0 || px.x() > 640 || px.y() < 0 || px.y() > 480) continue;
+      BundleObservation o;
+      o.keyframe = i;
+      o.point = j;
+      o.pixel_px = px;
+      o.sigma_px = std::pow(1.2, std::uniform_int_distribution<int>(0, 3)(rng));
+      if (with_depth) {
+        o.depth_m = p.z();
+        o.sigma_depth_m = 0.01;
+      }
+      s.observations.push_back(o);
+    }
+  }
+  return s;
+}
+
+/// 0.5 * sum chi2 at the given poses and points, without a robust loss (the test's own oracle).
+double plain_cost(const BAScene& s, const std::vector<Eigen::Isometry3d>& poses,
+                  const std::vector<Eigen::Vector3d>& points) {
+  double cost = 0;
+  for (const BundleObservation& o : s.observations) {
+    const Eigen::Vector3d p = poses[o.keyframe].inverse() * points[o.point];
+    cost += 0.5 * ((s.K.project(p) - o.pixel_px) / o.sigma_px).squaredNorm();
+    if (!std::isnan(o.depth_m)) cost += 0.5 * std::pow((p.z() - o.depth_m) / o.sigma_depth_m, 2);
+  }
+  return cost;
+}
+
+void perturb(std::mt19937& rng, BAScene& s, std::vector<Eigen::Isometry3d>& poses, std::vector<Eigen::Vector3d>& points,
+             const std::vector<int>& fixed) {
+  poses = s.T_world_camera;
+  points = s.points;
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    if (std::find(fixed.begin(), fixed.end(), static_cast<int>(i)) == fixed.end())
+      poses[i] = poses[i] * random_motion(rng, 0.01, 0.03);
+  for (Eigen::Vector3d& p : points)
+    p += Eigen::Vector3d(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)) * 0.05;
+}
+
+}  // namespace
+
+TEST_CASE("BundleAdjuster recovers poses and points from noise-free pixels (two keyframes fixed)", "[ceres]") {
+  std::mt19937 rng(31);
+  BAScene s = make_ba_scene(rng, 6, 150, false);
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector3d> points;
+  perturb(rng, s, poses, points, {0, 1});  // pixels alone leave the scale free: two fixed poses fix it
+  const BundleAdjustmentResult r = BundleAdjuster().adjust(s.K, poses, points, s.observations, {0, 1});
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    CAPTURE(i);
+    CHECK(rotation_error_rad(r.T_world_camera[i], s.T_world_camera[i]) < 1e-6);
+    CHECK(translation_error_m(r.T_world_camera[i], s.T_world_camera[i]) < 1e-6);
+  }
+  double worst_point_m = 0;
+  for (std::size_t j = 0; j < points.size(); ++j)
+    worst_point_m = std::max(worst_point_m, (r.points_world_m[j] - s.points[j]).norm());
+  CHECK(worst_point_m < 1e-6);
+  CHECK(r.outlier_count == 0);
+  CHECK(r.final_rms_px < 1e-6);
+  CHECK(r.initial_cost > r.final_cost);
+  CHECK(r.converged);
+  CHECK(cge_test::bit_identical(r.T_world_camera[0], poses[0]));
+}
+
+TEST_CASE("BundleAdjuster with depth observations recovers the truth with only the first keyframe fixed", "[ceres]") {
+  std::mt19937 rng(32);
+  BAScene s = make_ba_scene(rng, 5, 120, true);
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector3d> points;
+  perturb(rng, s, poses, points, {0});
+  const BundleAdjustmentResult r = BundleAdjuster().adjust(s.K, poses, points, s.observations);
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    CAPTURE(i);
+    CHECK(rotation_error_rad(r.T_world_camera[i], s.T_world_camera[i]) < 1e-6);
+    CHECK(translation_error_m(r.T_world_camera[i], s.T_world_camera[i]) < 1e-6);
+  }
+  for (std::size_t j = 0; j < points.size(); ++j) CHECK((r.points_world_m[j] - s.points[j]).norm() < 1e-6);
+  CHECK(r.outlier_count == 0);
+}
+
+TEST_CASE("BundleAdjuster on noisy pixels: cost no worse than the truth's, RMS at the noise level", "[ceres]") {
+  std::mt19937 rng(33);
+  BAScene s = make_ba_scene(rng, 8, 300, false);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  double noise_sq = 0;
+  for (BundleObservation& o : s.observations) {
+    const Eigen::Vector2d e = o.sigma_px * Eigen::Vector2d(noise(rng), noise(rng));
+    o.pixel_px += e;
+    noise_sq += e.squaredNorm();
+  }
+  const double noise_rms_px = std::sqrt(noise_sq / static_cast<double>(s.observations.size()));
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector3d> points;
+  perturb(rng, s, poses, points, {0, 1});
+  BundleAdjustmentSettings settings;
+  settings.rounds = 1;         // one plain least-squares solve over every observation, so that the optimum's
+  settings.robust_rounds = 0;  // cost is comparable with the truth's
+  const BundleAdjustmentResult r = BundleAdjuster(settings).adjust(s.K, poses, points, s.observations, {0, 1});
+  const double truth_cost = plain_cost(s, s.T_world_camera, s.points);
+  const double start_cost = plain_cost(s, poses, points);
+  CHECK(plain_cost(s, r.T_world_camera, r.points_world_m) <= truth_cost);
+  CHECK(r.final_cost == Approx(plain_cost(s, r.T_world_camera, r.points_world_m)).epsilon(1e-9));
+  CHECK(r.initial_cost == Approx(start_cost).epsilon(1e-9));
+  // Fitting 3 parameters per point and 6 per free pose absorbs a little noise: RMS slightly below it.
+  // (final_rms_px counts inliers only, so compare the all-observation figure.)
+  double sq = 0;
+  for (const BundleObservation& o : s.observations)
+    sq += (s.K.project(r.T_world_camera[o.keyframe].inverse() * r.points_world_m[o.point]) - o.pixel_px).squaredNorm();
+  const double rms_px = std::sqrt(sq / static_cast<double>(s.observations.size()));
+  CHECK(rms_px < noise_rms_px);
+  CHECK(rms_px > 0.7 * noise_rms_px);
+  // Scale is fixed by the 0.3 m between keyframes 0 and 1 only: the far keyframes move by centimetres.
+  for (std::size_t i = 2; i < poses.size(); ++i)
+    CHECK(translation_error_m(r.T_world_camera[i], s.T_world_camera[i]) < 0.05);
+}
+
+TEST_CASE("BundleAdjuster flags exactly the injected gross errors on otherwise exact data", "[ceres]") {
+  std::mt19937 rng(34);
+  BAScene s = make_ba_scene(rng, 6, 200, true);
+  // One observation of every third point seen by at least 4 keyframes (with fewer, the point itself
+  // could absorb a gross error), 30..60 sigma off.
+  std::vector<int> seen(s.points.size(), 0);
+  for (const BundleObservation& o : s.observations) ++seen[o.point];
+  std::vector<bool> corrupted(s.observations.size(), false), point_done(s.points.size(), false);
+  for (std::size_t k = 0; k < s.observations.size(); ++k) {
+    const int j = s.observations[k].point;
+    if (seen[j] < 4 || j % 3 != 0 || point_done[j]) continue;
+    point_done[j] = true;
+    const double angle = uniform(rng, 0, 6.28);
+    s.observations[k].pixel_px +=
+        uniform(rng, 30, 60) * s.observations[k].sigma_px * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    corrupted[k] = true;
+  }
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector3d> points;
+  perturb(rng, s, poses, points, {0});
+  const BundleAdjustmentResult r = BundleAdjuster().adjust(s.K, poses, points, s.observations);
+  REQUIRE(r.outliers.size() == s.observations.size());
+  int expected = 0;
+  for (std::size_t k = 0; k < corrupted.size(); ++k) {
+    CHECK(r.outliers[k] == corrupted[k]);
+    expected += corrupted[k] ? 1 : 0;
+  }
+  CHECK(r.outlier_count == expected);
+  CHECK(expected > 20);
+  // The second round, without the flagged observations, is exact again.
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    CHECK(translation_error_m(r.T_world_camera[i], s.T_world_camera[i]) < 1e-6);
+  CHECK(r.rounds == 2);
+}
+
+TEST_CASE("BundleAdjuster leaves out and flags observations behind their camera at the start", "[ceres]") {
+  std::mt19937 rng(35);
+  BAScene s = make_ba_scene(rng, 4, 60, true);
+  std::vector<Eigen::Vector3d> points = s.points;
+  // Add a point behind keyframe 0 with a (bogus) observation: it must not break the solve.
+  points.emplace_back(0.0, 0.0, -3.0);
+  s.observations.push_back({0, static_cast<int>(points.size()) - 1, Eigen::Vector2d(320, 240), 1.0,
+                            std::numeric_limits<double>::quiet_NaN(), 0.0});
+  const BundleAdjustmentResult r = BundleAdjuster().adjust(s.K, s.T_world_camera, points, s.observations);
+  CHECK(r.outliers.back());
+  CHECK(r.outlier_count == 1);
+  CHECK(r.points_world_m.back() == points.back());  // unobserved in the solve: returned as given
+}
+
+TEST_CASE("BundleAdjuster is deterministic: two runs give bit-identical results", "[ceres]") {
+  std::mt19937 rng(36);
+  BAScene s = make_ba_scene(rng, 6, 200, true);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  for (BundleObservation& o : s.observations) o.pixel_px += Eigen::Vector2d(noise(rng), noise(rng));
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector3d> points;
+  perturb(rng, s, poses, points, {0});
+  const BundleAdjustmentResult a = BundleAdjuster().adjust(s.K, poses, points, s.observations);
+  const BundleAdjustmentResult b = BundleAdjuster().adjust(s.K, poses, points, s.observations);
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    CHECK(cge_test::bit_identical(a.T_world_camera[i], b.T_world_camera[i]));
+  bool points_identical = true;
+  for (std::size_t j = 0; j < points.size(); ++j)
+    points_identical = points_identical &&
+                       std::memcmp(a.points_world_m[j].data(), b.points_world_m[j].data(), 3 * sizeof(double)) == 0;
+  CHECK(points_identical);
+  CHECK(a.outliers == b.outliers);
+  CHECK(a.final_cost == b.final_cost);
+}
+
+TEST_CASE("BundleAdjuster rejects invalid input with a message naming it", "[ceres]") {
+  std::mt19937 rng(37);
+  const BAScene s = make_ba_scene(rng, 3, 30, false);
+  const BundleAdjuster ba;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto obs = s.observations;
+  obs[4].keyframe = 3;
+  CHECK_THROWS_WITH(ba.adjust(s.K, s.T_world_camera, s.points, obs),
+                    Catch::Contains("observation 4: keyframe 3 out of range"));
+  obs = s.observations;
+  obs[2].point = -1;
+  CHECK_THROWS_WITH(ba.adjust(s.K, s.T_world_camera, s.points, obs),
+                    Catch::Contains("observation 2: point -1 out of range"));
+  obs = s.observations;
+  obs[1].pixel_px.y() = nan;
+  CHECK_THROWS_WITH(ba.adjust(s.K, s.T_world_camera, s.points, obs), Catch::Contains("observation 1: pixel_px"));
+  obs = s.observations;
+  obs[0].sigma_px = -2;
+  CHECK_THROWS_WITH(ba.adjust(s.K, s.T_world_camera, s.points, obs), Catch::Contains("observation 0: sigma_px"));
+  obs = s.observations;
+  obs[3].depth_m = 2.0;  // sigma_depth_m left at 0
+  CHECK_THROWS_WITH(ba.adjust(s.K, s.T_world_camera, s.points, obs), Catch::Contains("observation 3: sigma_depth_m"));
+  obs[3].depth_m = -1.0;
+  CHECK_THROWS_WITH(ba.adjust(s.K, s.T_world_camera, s.points, obs), Catch::Contains("observation 3: depth_m"));
+  auto points = s.points;
+  points[5].x() = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_WITH(ba.adjust(s.K, s.T_world_camera, points, s.observations), Catch::Contains("point 5 is not finite"));
+  auto poses = s.T_world_camera;
+  poses[1].linear()(0, 1) += 0.1;
+  CHECK_THROWS_WITH(ba.adjust(s.K, poses, s.points, s.observations), Catch::Contains("pose 1"));
+  CHECK_THROWS_WITH(ba.adjust(s.K, s.T_world_camera, s.points, s.observations, {}),
+                    Catch::Contains("at least one fixed"));
+  CHECK_THROWS_WITH(ba.adjust(s.K, s.T_world_camera, s.points, s.observations, {3}),
+                    Catch::Contains("fixed keyframe 3"));
+  cge::PinholeIntrinsics<double> K = s.K;
+  K.fy_px = 0;
+  CHECK_THROWS_WITH(ba.adjust(K, s.T_world_camera, s.points, s.observations), Catch::Contains("intrinsics"));
+  BundleAdjustmentSettings bad;
+  bad.chi2_threshold_3dof = 0;
+  CHECK_THROWS_WITH(BundleAdjuster(bad).adjust(s.K, s.T_world_camera, s.points, s.observations),
+                    Catch::Contains("chi2_threshold_3dof"));
+}
