@@ -1,0 +1,187 @@
+#pragma once
+// PoseRefiner: motion-only refinement of a camera pose from 3-D world points observed at pixels
+// (ALGORITHMS.md section 8: the PnP pose refined by minimising the reprojection error with a robust
+// loss), in the manner of ORB-SLAM2's PoseOptimization:
+//   - each observation's residual is whitened by its sigma_px (e.g. 1.2^octave for ORB), so the
+//     squared residual is a chi-square statistic with 2 dof;
+//   - `rounds` solves from the current pose; after each, every observation (outliers included, so
+//     one can come back) is re-classified: outlier when chi2 > chi2_threshold or the point is not in
+//     front of the camera; outliers are left out of the next round;
+//   - the first `robust_rounds` rounds use a Huber loss of width huber_delta (in sigma units, i.e.
+//     huber_delta * sigma_px pixels), the later ones plain least squares on the inliers.
+// Internally the pose is T_camera_world (see reprojection_cost.hpp); input and output are
+// T_world_camera, metres. Deterministic: one thread, fixed options (solver_settings.hpp).
+#include "cge/ceres/ceres_headers.hpp"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cge/ceres/reprojection_cost.hpp"
+#include "cge/ceres/se3_parametrisation.hpp"
+#include "cge/ceres/solver_settings.hpp"
+#include "cge/core/pinhole_intrinsics.hpp"
+
+namespace cge {
+
+/// One 3-D / 2-D correspondence.
+struct PoseObservation {
+  Eigen::Vector3d point_world_m = Eigen::Vector3d::Zero();  ///< the map point, world frame, metres
+  Eigen::Vector2d pixel_px = Eigen::Vector2d::Zero();       ///< where it is observed, pixels
+  double sigma_px = 1.0;  ///< standard deviation of the pixel position, pixels (> 0), e.g. 1.2^octave
+};
+
+struct PoseRefinementSettings {
+  /// Optimise / re-classify rounds (ORB-SLAM2: 4), >= 1.
+  int rounds = 4;
+  /// The first this many rounds use the Huber loss, the rest none (ORB-SLAM2: 2), 0..rounds.
+  int robust_rounds = 2;
+  /// Huber width on the whitened residual norm, sigma units (ORB-SLAM2: sqrt(5.991)), > 0.
+  double huber_delta = 2.4477;
+  /// An observation is an outlier when its chi2 (2 dof) exceeds this (95 %: 5.991), > 0.
+  double chi2_threshold = 5.991;
+  /// Fewer valid observations than this: refine() throws (ORB-SLAM2: 3), >= 3.
+  int min_observations = 3;
+  /// Stop before a round that would have fewer inliers than this (ORB-SLAM2: 10), >= 3.
+  int min_inliers_to_continue = 10;
+  /// A point at or closer than this depth in the camera frame is an outlier, metres, >= 0.
+  double min_depth_m = 1e-6;
+  /// Ceres iterations and tolerances per round (ORB-SLAM2: 10 iterations).
+  CeresSolverSettings solver{10, 1e-8, 1e-10, 1e-10};
+
+  /// Throws std::invalid_argument naming the bad field.
+  void validate() const {
+    const auto fail = [](const std::string& what) { throw std::invalid_argument("PoseRefinementSettings: " + what); };
+    if (rounds < 1) fail("rounds must be at least 1");
+    if (robust_rounds < 0 || robust_rounds > rounds) fail("robust_rounds must be in [0, rounds]");
+    if (!(std::isfinite(huber_delta) && huber_delta > 0)) fail("huber_delta must be finite and positive");
+    if (!(std::isfinite(chi2_threshold) && chi2_threshold > 0)) fail("chi2_threshold must be finite and positive");
+    if (min_observations < 3) fail("min_observations must be at least 3");
+    if (min_inliers_to_continue < 3) fail("min_inliers_to_continue must be at least 3");
+    if (!(std::isfinite(min_depth_m) && min_depth_m >= 0)) fail("min_depth_m must be finite and not negative");
+    solver.validate("PoseRefinementSettings.solver");
+  }
+};
+
+struct PoseRefinementResult {
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  ///< refined pose
+  std::vector<bool> inliers;  ///< per observation, classification at the refined pose
+  int inlier_count = 0;
+  double initial_cost = 0;  ///< Ceres cost (0.5 * sum of robustified chi2) before the first round
+  double final_cost = 0;    ///< Ceres cost after the last round (on that round's inliers and loss)
+  double final_rms_px = 0;  ///< RMS reprojection error of the inliers at the refined pose, pixels
+  int rounds = 0;           ///< rounds solved
+  int iterations = 0;       ///< Ceres iterations over all rounds
+  bool converged = false;   ///< the last round reached a convergence tolerance (or could not lower the cost at all)
+};
+
+class PoseRefiner {
+ public:
+  PoseRefinementSettings settings;
+
+  PoseRefiner() = default;
+  explicit PoseRefiner(const PoseRefinementSettings& s) : settings(s) {}
+
+  /// Refines `T_world_camera_initial` (e.g. from PnP). Throws std::invalid_argument on invalid
+  /// settings, intrinsics, pose or observations (naming the index), or fewer than
+  /// settings.min_observations observations.
+  PoseRefinementResult refine(const PinholeIntrinsics<double>& intrinsics,
+                              const std::vector<PoseObservation>& observations,
+                              const Eigen::Isometry3d& T_world_camera_initial) const {
+    settings.validate();
+    validate_input(intrinsics, observations, T_world_camera_initial);
+
+    const std::size_t n = observations.size();
+    SE3Block pose = SE3Block::from_isometry(T_world_camera_initial.inverse());
+    PoseRefinementResult result;
+    result.inliers.assign(n, true);
+    // Points not in front of the starting pose cannot enter the first round.
+    classify(intrinsics, observations, pose.to_isometry(), /*use_chi2=*/false, result);
+
+    const ceres::Solver::Options options = settings.solver.options(/*sparse=*/false, /*schur=*/false);
+    for (int round = 0; round < settings.rounds; ++round) {
+      if (result.inlier_count < (round == 0 ? settings.min_observations : settings.min_inliers_to_continue)) {
+        if (round == 0)
+          throw std::invalid_argument("PoseRefiner: only " + std::to_string(result.inlier_count) +
+                                      " observations in front of the initial pose, at least " +
+                                      std::to_string(settings.min_observations) + " needed");
+        break;
+      }
+      ceres::Problem problem;
+      pose.add_to(problem);
+      const bool robust = round < settings.robust_rounds;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!result.inliers[i]) continue;
+        const PoseObservation& o = observations[i];
+        PoseOnlyReprojectionCost cost{intrinsics, o.point_world_m, o.pixel_px, 1.0 / o.sigma_px, settings.min_depth_m};
+        problem.AddResidualBlock(PoseOnlyReprojectionCost::create(cost),
+                                 robust ? new ceres::HuberLoss(settings.huber_delta) : nullptr, pose.q_xyzw.data(),
+                                 pose.t.data());
+      }
+      ceres::Solver::Summary summary;
+      ceres::Solve(options, &problem, &summary);
+      if (round == 0) result.initial_cost = summary.initial_cost;
+      result.final_cost = summary.final_cost;
+      result.iterations += static_cast<int>(summary.iterations.size()) - 1;
+      // A round that starts at a minimum to machine precision can run out of iterations rejecting
+      // steps at the rounding floor: no decrease at all counts as converged too.
+      result.converged =
+          summary.termination_type == ceres::CONVERGENCE ||
+          (summary.termination_type == ceres::NO_CONVERGENCE && summary.final_cost >= summary.initial_cost);
+      result.rounds = round + 1;
+      classify(intrinsics, observations, pose.to_isometry(), /*use_chi2=*/true, result);
+    }
+
+    result.T_world_camera = pose.to_isometry().inverse();
+    double sum_sq = 0;
+    const Eigen::Isometry3d T_camera_world = pose.to_isometry();
+    for (std::size_t i = 0; i < n; ++i)
+      if (result.inliers[i])
+        sum_sq += (intrinsics.project(T_camera_world * observations[i].point_world_m) - observations[i].pixel_px)
+                      .squaredNorm();
+    result.final_rms_px = result.inlier_count > 0 ? std::sqrt(sum_sq / result.inlier_count) : 0.0;
+    return result;
+  }
+
+ private:
+  void validate_input(const PinholeIntrinsics<double>& K, const std::vector<PoseObservation>& observations,
+                      const Eigen::Isometry3d& T_world_camera_initial) const {
+    if (!(std::isfinite(K.fx_px) && std::isfinite(K.fy_px) && std::isfinite(K.cx_px) && std::isfinite(K.cy_px) &&
+          K.fx_px > 0 && K.fy_px > 0))
+      throw std::invalid_argument("PoseRefiner: intrinsics must be finite with positive focal lengths");
+    validate_rigid_transform(T_world_camera_initial, "PoseRefiner: T_world_camera_initial");
+    if (observations.size() < static_cast<std::size_t>(settings.min_observations))
+      throw std::invalid_argument("PoseRefiner: " + std::to_string(observations.size()) + " observations, at least " +
+                                  std::to_string(settings.min_observations) + " needed (settings.min_observations)");
+    for (std::size_t i = 0; i < observations.size(); ++i) {
+      const PoseObservation& o = observations[i];
+      const std::string where = "PoseRefiner: observation " + std::to_string(i) + ": ";
+      if (!o.point_world_m.allFinite()) throw std::invalid_argument(where + "point_world_m is not finite");
+      if (!o.pixel_px.allFinite()) throw std::invalid_argument(where + "pixel_px is not finite");
+      if (!(std::isfinite(o.sigma_px) && o.sigma_px > 0))
+        throw std::invalid_argument(where + "sigma_px must be finite and positive");
+    }
+  }
+
+  /// Sets inliers / inlier_count at T_camera_world: in front of the camera and, when use_chi2,
+  /// chi2 <= chi2_threshold.
+  void classify(const PinholeIntrinsics<double>& K, const std::vector<PoseObservation>& observations,
+                const Eigen::Isometry3d& T_camera_world, bool use_chi2, PoseRefinementResult& result) const {
+    result.inlier_count = 0;
+    for (std::size_t i = 0; i < observations.size(); ++i) {
+      const PoseObservation& o = observations[i];
+      bool in_front = false;
+      const double chi2 =
+          reprojection_chi2(K, T_camera_world, o.point_world_m, o.pixel_px, o.sigma_px, settings.min_depth_m, in_front);
+      const bool inlier = in_front && (!use_chi2 || chi2 <= settings.chi2_threshold);
+      result.inliers[i] = inlier;
+      result.inlier_count += inlier ? 1 : 0;
+    }
+  }
+};
+
+}  // namespace cge
