@@ -50,7 +50,7 @@ System::System(const SystemSettings& settings, const PinholeIntrinsics<double>& 
       intrinsics_(intrinsics),
       segmenter_(std::move(segmenter)),
       frame_maker_(settings, intrinsics),
-      tracker_(settings.tracker, intrinsics),
+      tracker_(settings.tracker, intrinsics, settings.frame.orb.scale_factor),
       keyframe_policy_(keyframe_policy_of(settings.mode), settings.patch_keyframes, settings.orbslam2_keyframes) {}
 
 const FrameRecord& System::process(const FrameInput& input) {

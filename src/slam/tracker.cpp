@@ -82,16 +82,6 @@ Eigen::Isometry3d from_rvec_tvec(const cv::Mat& rvec, const cv::Mat& tvec) {
   return T;
 }
 
-void to_rvec_tvec(const Eigen::Isometry3d& T, cv::Mat& rvec, cv::Mat& tvec) {
-  cv::Mat R(3, 3, CV_64F);
-  tvec.create(3, 1, CV_64F);
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) R.at<double>(r, c) = T.linear()(r, c);
-    tvec.at<double>(r) = T.translation()(r);
-  }
-  cv::Rodrigues(R, rvec);
-}
-
 }  // namespace
 
 struct Tracker::Attempt {
@@ -101,8 +91,8 @@ struct Tracker::Attempt {
   std::vector<std::int64_t> map_point_ids;
 };
 
-Tracker::Tracker(const TrackerSettings& settings, const PinholeIntrinsics<double>& intrinsics)
-    : settings_(settings), intrinsics_(intrinsics) {}
+Tracker::Tracker(const TrackerSettings& settings, const PinholeIntrinsics<double>& intrinsics, double orb_scale_factor)
+    : settings_(settings), intrinsics_(intrinsics), orb_scale_factor_(orb_scale_factor), refiner_(settings.refinement) {}
 
 std::vector<std::int64_t> Tracker::local_map_points(const Map& map) const {
   std::set<int> keyframes;
@@ -165,63 +155,67 @@ int Tracker::match_by_projection(const Frame& frame, const Map& map, const std::
   return static_cast<int>(std::count_if(matches.begin(), matches.end(), [](std::int64_t m) { return m >= 0; }));
 }
 
-bool Tracker::solve_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches,
-                         const Eigen::Isometry3d* guess, int min_inliers, Attempt& out) const {
+bool Tracker::ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches,
+                          int min_inliers, Eigen::Isometry3d& T_world_camera) const {
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
-  std::vector<int> keypoint_of;
   for (std::size_t i = 0; i < matches.size(); ++i) {
     if (matches[i] < 0) continue;
     const Eigen::Vector3d& X = map.map_point(matches[i]).position_world;
     object.emplace_back(X.x(), X.y(), X.z());
     image.emplace_back(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
-    keypoint_of.push_back(static_cast<int>(i));
   }
-  out.matches = static_cast<int>(object.size());
-  if (out.matches < std::max(kMinPnpPoints, min_inliers)) return false;
+  if (static_cast<int>(object.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
   const cv::Matx33d K(intrinsics_.fx_px, 0, intrinsics_.cx_px, 0, intrinsics_.fy_px, intrinsics_.cy_px, 0, 0, 1);
   cv::Mat rvec, tvec;
-  if (guess != nullptr) to_rvec_tvec(guess->inverse(), rvec, tvec);
-  std::vector<int> ransac_inliers;
-  const bool ok = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, guess != nullptr,
-                                     settings_.pnp_iterations, static_cast<float>(settings_.pnp_reprojection_px),
-                                     settings_.pnp_confidence, ransac_inliers, cv::SOLVEPNP_ITERATIVE);
-  if (!ok || static_cast<int>(ransac_inliers.size()) < kMinPnpPoints) return false;
-
-  // Inliers over all matches under a pose, and refinement on them (least squares on the inliers:
-  // the inlier threshold truncates the loss).
-  const auto classify = [&](const cv::Mat& r, const cv::Mat& t, std::vector<int>& inliers) {
-    const Eigen::Isometry3d T_camera_world = from_rvec_tvec(r, t);
-    inliers.clear();
-    const double th_sq = settings_.pnp_reprojection_px * settings_.pnp_reprojection_px;
-    for (std::size_t k = 0; k < object.size(); ++k) {
-      const Eigen::Vector3d pc = T_camera_world * Eigen::Vector3d(object[k].x, object[k].y, object[k].z);
-      if (pc.z() < kMinPointDepthM) continue;
-      const Eigen::Vector2d uv = intrinsics_.project(pc);
-      const double du = uv.x() - image[k].x, dv = uv.y() - image[k].y;
-      if (du * du + dv * dv < th_sq) inliers.push_back(static_cast<int>(k));
-    }
-  };
   std::vector<int> inliers;
-  classify(rvec, tvec, inliers);
-  for (int pass = 0; pass < 2 && static_cast<int>(inliers.size()) >= kMinPnpPoints; ++pass) {
-    std::vector<cv::Point3d> obj_in;
-    std::vector<cv::Point2d> img_in;
-    for (const int k : inliers) {
-      obj_in.push_back(object[static_cast<std::size_t>(k)]);
-      img_in.push_back(image[static_cast<std::size_t>(k)]);
-    }
-    cv::solvePnPRefineLM(obj_in, img_in, K, cv::noArray(), rvec, tvec);
-    classify(rvec, tvec, inliers);
+  // EPnP on minimal samples and, at the end, on all inliers (no iterative refinement here: the
+  // Ceres refinement follows).
+  const bool ok = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, settings_.pnp_iterations,
+                                     static_cast<float>(settings_.pnp_reprojection_px), settings_.pnp_confidence,
+                                     inliers, cv::SOLVEPNP_EPNP);
+  if (!ok || static_cast<int>(inliers.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
+  T_world_camera = from_rvec_tvec(rvec, tvec).inverse();
+  return T_world_camera.matrix().allFinite();
+}
+
+bool Tracker::refine_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches,
+                          const Eigen::Isometry3d& T_initial, int min_inliers, Attempt& out) const {
+  std::vector<PoseObservation> observations;
+  std::vector<int> keypoint_of;
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    if (matches[i] < 0) continue;
+    PoseObservation o;
+    o.point_world_m = map.map_point(matches[i]).position_world;
+    o.pixel_px = Eigen::Vector2d(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
+    o.sigma_px = std::pow(orb_scale_factor_, std::max(frame.keypoints[i].octave, 0));
+    observations.push_back(o);
+    keypoint_of.push_back(static_cast<int>(i));
   }
-  out.T_world_camera = from_rvec_tvec(rvec, tvec).inverse();
-  out.inliers = static_cast<int>(inliers.size());
+  out.matches = static_cast<int>(observations.size());
+  if (out.matches < std::max(kMinPnpPoints, min_inliers)) return false;
+  PoseRefinementResult refined;
+  try {
+    refined = refiner_.refine(intrinsics_, observations, T_initial);
+  } catch (const std::invalid_argument&) {
+    return false;  // too few points in front of the initial pose: a degenerate solution
+  }
+  out.T_world_camera = refined.T_world_camera;
+  out.inliers = refined.inlier_count;
   out.map_point_ids.assign(matches.size(), -1);
-  for (const int k : inliers) {
-    const int i = keypoint_of[static_cast<std::size_t>(k)];
-    out.map_point_ids[static_cast<std::size_t>(i)] = matches[static_cast<std::size_t>(i)];
+  for (std::size_t k = 0; k < observations.size(); ++k) {
+    if (!refined.inliers[k]) continue;
+    const auto i = static_cast<std::size_t>(keypoint_of[k]);
+    out.map_point_ids[i] = matches[i];
   }
   return out.inliers >= min_inliers;
+}
+
+bool Tracker::refine_with_local_map(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
+                                    const Eigen::Isometry3d& T_initial, Attempt& out) const {
+  std::vector<std::int64_t> matches;
+  match_by_projection(frame, map, points, T_initial, settings_.search_radius_px, matches);
+  return refine_pose(frame, map, matches, T_initial, settings_.min_inliers, out);
 }
 
 bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction,
@@ -234,19 +228,13 @@ bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::I
                                 settings_.search_radius_px * settings_.wide_search_factor, matches);
   }
   if (found < settings_.min_matches) return false;
-  Attempt first;
-  if (!solve_pose(frame, map, matches, &prediction, settings_.min_inliers, first)) return false;
-  if ((first.T_world_camera.translation() - prediction.translation()).norm() > settings_.max_jump_m) return false;
-  // Second pass: the refined pose finds the points the prediction missed.
-  match_by_projection(frame, map, points, first.T_world_camera, settings_.search_radius_px, matches);
-  Attempt second;
-  if (solve_pose(frame, map, matches, &first.T_world_camera, settings_.min_inliers, second) &&
-      (second.T_world_camera.translation() - prediction.translation()).norm() <= settings_.max_jump_m) {
-    out = std::move(second);
-  } else {
-    out = std::move(first);
-  }
-  return true;
+  // RANSAC on the matches of the prediction, then the matches of that pose refined (the second
+  // search finds the points the prediction missed).
+  Eigen::Isometry3d T_ransac;
+  if (!ransac_pose(frame, map, matches, settings_.min_inliers, T_ransac)) return false;
+  if ((T_ransac.translation() - prediction.translation()).norm() > settings_.max_jump_m) return false;
+  if (!refine_with_local_map(frame, map, points, T_ransac, out)) return false;
+  return (out.T_world_camera.translation() - prediction.translation()).norm() <= settings_.max_jump_m;
 }
 
 bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const {
@@ -281,10 +269,12 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
       matches[static_cast<std::size_t>(query_index[static_cast<std::size_t>(m[0].queryIdx)])] =
           train_point[static_cast<std::size_t>(m[0].trainIdx)];
     }
-    Attempt attempt;
-    if (!solve_pose(frame, map, matches, nullptr, settings_.min_relocalisation_inliers, attempt)) continue;
+    Eigen::Isometry3d T_ransac;
+    if (!ransac_pose(frame, map, matches, settings_.min_relocalisation_inliers, T_ransac)) continue;
     Attempt local;
-    out = track_local_map(frame, map, attempt.T_world_camera, local) ? std::move(local) : std::move(attempt);
+    if (!refine_with_local_map(frame, map, local_map_points(map), T_ransac, local)) continue;
+    if (local.inliers < settings_.min_relocalisation_inliers) continue;
+    out = std::move(local);
     return true;
   }
   return false;

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cge/ceres/pose_refinement.hpp"
 #include "cge/frontend/depth_mad_filter.hpp"
 #include "cge/frontend/keyframe_policy.hpp"
 
@@ -92,9 +93,9 @@ struct TrackerSettings {
   /// A tracked pose farther than this from the prediction is rejected as a wrong solution (the
   /// camera moves some centimetres per frame), metres.
   double max_jump_m = 0.3;
-  /// Huber threshold of the motion-only refinement, pixels (ORB-SLAM2: sqrt(5.991) for monocular).
-  double refine_huber_px = 2.447;
-  int refine_iterations = 10;  ///< Gauss-Newton iterations of the motion-only refinement
+  /// Motion-only refinement of the PnP pose (Ceres, Huber loss, chi2 outlier rounds; ORB-SLAM2's
+  /// values). Each match's pixel sigma is scale_factor^octave of its keypoint.
+  PoseRefinementSettings refinement;
   /// The first frame initialises the map only with at least this many static keypoints with
   /// depth (ORB-SLAM2 RGB-D: 500); with fewer it is reported lost and the next frame tries.
   int min_initial_points = 100;
@@ -141,8 +142,7 @@ struct SystemSettings {
     if (!(t.pnp_reprojection_px > 0)) fail("tracker.pnp_reprojection_px must be > 0");
     if (!(t.pnp_confidence > 0 && t.pnp_confidence < 1)) fail("tracker.pnp_confidence must be in (0, 1)");
     if (!(t.max_jump_m > 0)) fail("tracker.max_jump_m must be > 0");
-    if (!(t.refine_huber_px > 0)) fail("tracker.refine_huber_px must be > 0");
-    if (t.refine_iterations < 0) fail("tracker.refine_iterations must not be negative");
+    t.refinement.validate();
     if (t.min_initial_points < 4) fail("tracker.min_initial_points must be at least 4");
     if (t.relocalisation_keyframes < 0) fail("tracker.relocalisation_keyframes must not be negative");
     if (t.min_relocalisation_inliers < 4) fail("tracker.min_relocalisation_inliers must be at least 4");

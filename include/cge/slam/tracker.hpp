@@ -8,8 +8,11 @@
 // first frame (empty map) is reported `initialised` at the identity pose: the System makes it the
 // first keyframe with map points from depth (RGB-D needs no two-view initialisation).
 //
+// Refinement: PoseRefiner (cge/ceres/pose_refinement.hpp) on every match from the RANSAC pose; its
+// chi2 classification gives the inliers.
+//
 // Deterministic: cv::solvePnPRansac draws from its own fixed-seed generator, matching visits map
-// points and keypoints in id order.
+// points and keypoints in id order, Ceres runs single-threaded.
 #include <cstdint>
 #include <vector>
 
@@ -48,7 +51,9 @@ struct TrackResult {
 
 class Tracker {
  public:
-  Tracker(const TrackerSettings& settings, const PinholeIntrinsics<double>& intrinsics);
+  /// orb_scale_factor: the ORB pyramid's scale between levels (a keypoint of octave o has a pixel
+  /// sigma of orb_scale_factor^o in the refinement).
+  Tracker(const TrackerSettings& settings, const PinholeIntrinsics<double>& intrinsics, double orb_scale_factor = 1.2);
 
   /// The pose of `frame` (its static keypoints only are used) against `map`.
   TrackResult track(const Frame& frame, const Map& map);
@@ -67,12 +72,18 @@ class Tracker {
   int match_by_projection(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
                           const Eigen::Isometry3d& T_world_camera, double radius_px,
                           std::vector<std::int64_t>& matches) const;
-  bool solve_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches,
-                  const Eigen::Isometry3d* guess, int min_inliers, Attempt& out) const;
+  bool ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches, int min_inliers,
+                   Eigen::Isometry3d& T_world_camera) const;
+  bool refine_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches,
+                   const Eigen::Isometry3d& T_initial, int min_inliers, Attempt& out) const;
+  bool refine_with_local_map(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
+                             const Eigen::Isometry3d& T_initial, Attempt& out) const;
   std::vector<std::int64_t> local_map_points(const Map& map) const;
 
   TrackerSettings settings_;
   PinholeIntrinsics<double> intrinsics_;
+  double orb_scale_factor_;
+  PoseRefiner refiner_;
   bool has_last_ = false;
   Eigen::Isometry3d T_world_last_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_last_current_velocity_ = Eigen::Isometry3d::Identity();  ///< last frame-to-frame motion
