@@ -40,9 +40,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "cge/dataset/orbslam2_settings.hpp"
+#include "cge/dataset/segmentation_source.hpp"
+#include "cge/dataset/tum_sequence.hpp"
 #include "cge/segmentation/coco_classes.hpp"
-#include "cge/segmentation/precomputed_mask_reader.hpp"
-#include "cge/segmentation/yolov8_segmenter.hpp"
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
 #include "cge/sim/segmentation_error_model.hpp"
@@ -65,7 +66,6 @@ constexpr const char* kProgram = "cge_slam";
 constexpr int kProgressBarWidth = 40;
 constexpr const char* kDefaultPreset = "walking_xyz";
 constexpr int kDefaultPresetFrames = 300;  // 10 s at 30 fps when --frames is not given
-constexpr double kMaxAssociationGapS = 0.02;  // rgb/depth timestamps further apart do not associate (TUM tools)
 
 bool progress_line_open = false;
 
@@ -87,102 +87,23 @@ struct Options {
   bool force = false;
 };
 
-// ---- dataset reading (TUM lists and ORB-SLAM2 settings) -------------------------------------------
+// ---- settings ------------------------------------------------------------------------------------
 
-struct ListEntry {
-  double timestamp_s = 0;
-  std::string path;
-};
-
-/// A TUM list file (`timestamp path` per line, '#' comments). Errors name the file and line.
-std::vector<ListEntry> read_list(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) throw UsageError("cannot open " + file.string());
-  std::vector<ListEntry> entries;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const std::size_t first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream fields(line);
-    ListEntry e;
-    std::string rest;
-    if (!(fields >> e.timestamp_s >> e.path) || (fields >> rest) || !std::isfinite(e.timestamp_s)) {
-      throw UsageError(file.string() + ":" + std::to_string(number) + ": expected 'timestamp path', got '" + line + "'");
-    }
-    if (!entries.empty() && e.timestamp_s <= entries.back().timestamp_s) {
-      throw UsageError(file.string() + ":" + std::to_string(number) + ": timestamps must increase");
-    }
-    entries.push_back(e);
+/// Camera, depth scale and ORB extractor from an ORB-SLAM2 TUM YAML file.
+void apply_settings_file(const fs::path& file, cge::PinholeIntrinsics<double>& intrinsics,
+                         cge::slam::SystemSettings& settings) {
+  const cge::dataset::OrbSlam2Settings s = cge::dataset::read_orbslam2_settings(file);
+  intrinsics = s.camera;
+  settings.frame.depth_units_per_metre = s.depth_map_factor;
+  settings.frame.orb.features = s.orb.features;
+  settings.frame.orb.scale_factor = s.orb.scale_factor;
+  settings.frame.orb.levels = s.orb.levels;
+  settings.frame.orb.initial_fast_threshold = s.orb.initial_fast_threshold;
+  settings.frame.orb.min_fast_threshold = s.orb.min_fast_threshold;
+  if (!s.distortion.is_zero()) {
+    std::fprintf(stderr, "%s: warning: %s has lens distortion, which the tracker ignores (keypoints are not undistorted)\n",
+                 kProgram, file.string().c_str());
   }
-  return entries;
-}
-
-struct DatasetFrame {
-  double timestamp_s = 0;
-  std::string rgb_path, depth_path;
-};
-
-/// Each RGB image with the depth image nearest in time (within kMaxAssociationGapS), in RGB order.
-std::vector<DatasetFrame> associate(const fs::path& dir) {
-  const std::vector<ListEntry> rgb = read_list(dir / "rgb.txt");
-  const std::vector<ListEntry> depth = read_list(dir / "depth.txt");
-  std::vector<DatasetFrame> frames;
-  std::size_t j = 0;
-  for (const ListEntry& r : rgb) {
-    while (j + 1 < depth.size() &&
-           std::abs(depth[j + 1].timestamp_s - r.timestamp_s) <= std::abs(depth[j].timestamp_s - r.timestamp_s)) {
-      ++j;
-    }
-    if (j < depth.size() && std::abs(depth[j].timestamp_s - r.timestamp_s) <= kMaxAssociationGapS) {
-      frames.push_back({r.timestamp_s, (dir / r.path).string(), (dir / depth[j].path).string()});
-    }
-  }
-  if (frames.empty()) {
-    throw UsageError("no frame of " + (dir / "rgb.txt").string() + " associates with a depth image of " +
-                     (dir / "depth.txt").string() + " (within 0.02 s)");
-  }
-  return frames;
-}
-
-/// Camera and ORB settings from an ORB-SLAM2 TUM YAML file (Camera.fx/fy/cx/cy, DepthMapFactor,
-/// ORBextractor.*); missing ORB keys keep their defaults.
-void read_settings_yaml(const fs::path& file, cge::PinholeIntrinsics<double>& intrinsics,
-                        cge::slam::SystemSettings& settings) {
-  cv::FileStorage fsr;
-  try {
-    fsr.open(file.string(), cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw UsageError("cannot parse " + file.string() + ": " + e.what());
-  }
-  if (!fsr.isOpened()) throw UsageError("cannot open settings " + file.string());
-  const auto number = [&](const char* key, bool required, double fallback) {
-    const cv::FileNode n = fsr[key];
-    if (n.empty()) {
-      if (required) throw UsageError(file.string() + ": missing " + key);
-      return fallback;
-    }
-    if (!n.isReal() && !n.isInt()) throw UsageError(file.string() + ": " + key + " is not a number");
-    return static_cast<double>(n);
-  };
-  intrinsics.fx_px = number("Camera.fx", true, 0);
-  intrinsics.fy_px = number("Camera.fy", true, 0);
-  intrinsics.cx_px = number("Camera.cx", true, 0);
-  intrinsics.cy_px = number("Camera.cy", true, 0);
-  settings.frame.depth_units_per_metre = number("DepthMapFactor", false, settings.frame.depth_units_per_metre);
-  auto& orb = settings.frame.orb;
-  orb.features = static_cast<int>(number("ORBextractor.nFeatures", false, orb.features));
-  orb.scale_factor = number("ORBextractor.scaleFactor", false, orb.scale_factor);
-  orb.levels = static_cast<int>(number("ORBextractor.nLevels", false, orb.levels));
-  orb.initial_fast_threshold = static_cast<int>(number("ORBextractor.iniThFAST", false, orb.initial_fast_threshold));
-  orb.min_fast_threshold = static_cast<int>(number("ORBextractor.minThFAST", false, orb.min_fast_threshold));
-}
-
-cv::Mat read_image(const std::string& path, int flags, const char* what) {
-  cv::Mat image = cv::imread(path, flags);
-  if (image.empty()) throw UsageError("cannot read the " + std::string(what) + " image " + path);
-  return image;
 }
 
 // ---- the output folder ---------------------------------------------------------------------------
@@ -276,28 +197,23 @@ class FrameSource {
 
 class DatasetSource final : public FrameSource {
  public:
-  DatasetSource(std::vector<DatasetFrame> frames, double depth_units_per_metre)
-      : frames_(std::move(frames)), depth_units_per_metre_(depth_units_per_metre) {}
-  int frame_count() const override { return static_cast<int>(frames_.size()); }
+  explicit DatasetSource(const cge::dataset::TumSequence& sequence, int frames)
+      : sequence_(sequence), frames_(frames) {}
+  int frame_count() const override { return frames_; }
   cge::slam::FrameInput frame(int index) override {
-    const DatasetFrame& f = frames_[static_cast<std::size_t>(index)];
+    const cge::dataset::TumFrame f = sequence_.load(index);
     cge::slam::FrameInput in;
     in.index = index;
-    in.timestamp_s = f.timestamp_s;
-    in.bgr = read_image(f.rgb_path, cv::IMREAD_COLOR, "colour");
-    in.depth = read_image(f.depth_path, cv::IMREAD_UNCHANGED, "depth");
-    if (in.depth.type() != CV_16UC1) throw UsageError("the depth image " + f.depth_path + " is not 16-bit single-channel");
-    if (in.depth.size() != in.bgr.size()) {
-      throw UsageError("the depth image " + f.depth_path + " and the colour image " + f.rgb_path +
-                       " have different sizes");
-    }
-    in.stem = cge::frame_stem(f.rgb_path);
+    in.timestamp_s = f.rgb_timestamp_s;
+    in.bgr = f.bgr;
+    in.depth = f.depth;
+    in.stem = f.rgb_stem;
     return in;
   }
 
  private:
-  std::vector<DatasetFrame> frames_;
-  double depth_units_per_metre_;
+  const cge::dataset::TumSequence& sequence_;
+  int frames_;
 };
 
 class RenderedSource final : public FrameSource {
@@ -417,6 +333,7 @@ int run(Options opt) {
   }
 
   cge::PinholeIntrinsics<double> intrinsics;
+  std::unique_ptr<cge::dataset::TumSequence> sequence;
   std::unique_ptr<FrameSource> source;
   std::unique_ptr<cge::InstanceSegmenter> segmenter;
   std::string source_name;
@@ -427,26 +344,36 @@ int run(Options opt) {
     const cge::sim::PinholeCamera& cam = rendered->camera();
     intrinsics = {cam.fx_px, cam.fy_px, cam.cx_px, cam.cy_px};
     settings.frame.depth_units_per_metre = cam.depth_units_per_metre;
-    if (!opt.settings.empty()) read_settings_yaml(opt.settings, intrinsics, settings);
+    if (!opt.settings.empty()) apply_settings_file(opt.settings, intrinsics, settings);
+    if (opt.segmentation == "yolo" && cge::slam::uses_masks(settings.mode)) {
+      cge::dataset::SegmentationSourceSettings seg;
+      seg.source = cge::dataset::SegmentationSource::yolo;
+      seg.yolo_model_path = opt.model;
+      segmenter = cge::dataset::make_segmenter(seg, "");
+    }
     source = std::move(rendered);
     source_name = std::string(kDefaultPreset) + " rendered (" + std::to_string(frames) + " frames, seed " +
                   std::to_string(opt.seed) + ")";
   } else {
-    const fs::path dir(opt.dataset);
-    if (!fs::is_directory(dir)) throw UsageError("--dataset: '" + opt.dataset + "' is not a folder");
-    const fs::path yaml = opt.settings.empty() ? dir / "camera.yaml" : fs::path(opt.settings);
-    if (!fs::exists(yaml)) throw UsageError("no settings file: " + yaml.string() + " (give --settings YAML)");
-    read_settings_yaml(yaml, intrinsics, settings);
-    std::vector<DatasetFrame> frames = associate(dir);
-    if (opt.frames > 0 && static_cast<std::size_t>(opt.frames) < frames.size()) frames.resize(static_cast<std::size_t>(opt.frames));
-    source = std::make_unique<DatasetSource>(std::move(frames), settings.frame.depth_units_per_metre);
-    source_name = opt.dataset;
-    if (opt.segmentation == "ground_truth") {
-      segmenter = std::make_unique<cge::PrecomputedMaskReader>((dir / "segmentation").string());
+    if (!fs::is_directory(opt.dataset)) throw UsageError("--dataset: '" + opt.dataset + "' is not a folder");
+    cge::dataset::TumSequenceSettings sequence_settings;
+    sequence = std::make_unique<cge::dataset::TumSequence>(opt.dataset, sequence_settings);
+    if (!opt.settings.empty()) {
+      apply_settings_file(opt.settings, intrinsics, settings);
+    } else if (sequence->camera_settings_file()) {
+      apply_settings_file(*sequence->camera_settings_file(), intrinsics, settings);
+    } else {
+      throw UsageError("no settings: " + opt.dataset + " has no camera.yaml (give --settings YAML)");
     }
+    const int frames = opt.frames > 0 ? std::min(opt.frames, sequence->frame_count()) : sequence->frame_count();
+    source = std::make_unique<DatasetSource>(*sequence, frames);
+    source_name = opt.dataset;
+    cge::dataset::SegmentationSourceSettings seg;
+    seg.source = cge::dataset::parse_segmentation_source(opt.segmentation);
+    seg.yolo_model_path = opt.model;
+    seg.mask_folder = opt.masks;
+    if (cge::slam::uses_masks(settings.mode)) segmenter = cge::dataset::make_segmenter(seg, opt.dataset);
   }
-  if (opt.segmentation == "precomputed") segmenter = std::make_unique<cge::PrecomputedMaskReader>(opt.masks);
-  if (opt.segmentation == "yolo") segmenter = std::make_unique<cge::Yolov8Segmenter>(opt.model);
   try {
     settings.validate();
   } catch (const std::invalid_argument& e) {
