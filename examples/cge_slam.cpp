@@ -101,7 +101,8 @@ void apply_settings_file(const fs::path& file, cge::PinholeIntrinsics<double>& i
   settings.frame.orb.initial_fast_threshold = s.orb.initial_fast_threshold;
   settings.frame.orb.min_fast_threshold = s.orb.min_fast_threshold;
   if (!s.distortion.is_zero()) {
-    std::fprintf(stderr, "%s: warning: %s has lens distortion, which the tracker ignores (keypoints are not undistorted)\n",
+    std::fprintf(stderr,
+                 "%s: warning: %s has lens distortion, which the tracker ignores (keypoints are not undistorted)\n",
                  kProgram, file.string().c_str());
   }
 }
@@ -117,7 +118,8 @@ class OutputFolder {
     if (fs::exists(out_, ec)) {
       if (!fs::is_directory(out_, ec)) throw UsageError("'" + out_.string() + "' exists and is not a folder");
       if (!fs::is_empty(out_, ec) && !force) {
-        throw UsageError("'" + out_.string() + "' exists and is not empty (use --force to replace cge_slam's files in it)");
+        throw UsageError("'" + out_.string() +
+                         "' exists and is not empty (use --force to replace cge_slam's files in it)");
       }
     } else {
       fs::create_directories(out_, ec);
@@ -219,9 +221,7 @@ class DatasetSource final : public FrameSource {
 class RenderedSource final : public FrameSource {
  public:
   RenderedSource(const std::string& preset, int frames, std::uint64_t seed, bool segment)
-      : renderer_(cge::sim::make_preset(preset, frames, seed)),
-        model_(renderer_.instances(), seed),
-        segment_(segment) {
+      : renderer_(cge::sim::make_preset(preset, frames, seed)), model_(renderer_.instances(), seed), segment_(segment) {
     for (const cge::sim::InstanceInfo& i : renderer_.instances()) class_of_id_[i.id] = i.class_id;
   }
   int frame_count() const override { return renderer_.frame_count(); }
@@ -320,14 +320,16 @@ int run(Options opt) {
   settings.seed = opt.seed;
   if (opt.frames < 0) throw UsageError("--frames must not be negative, got " + std::to_string(opt.frames));
   if (opt.out.empty()) throw UsageError("--out must name a folder");
-  if (opt.segmentation.empty()) opt.segmentation = settings.mode == cge::slam::DynamicMode::none ? "none" : "ground_truth";
+  if (opt.segmentation.empty())
+    opt.segmentation = settings.mode == cge::slam::DynamicMode::none ? "none" : "ground_truth";
   const std::set<std::string> kinds = {"none", "ground_truth", "yolo", "precomputed"};
   if (kinds.count(opt.segmentation) == 0) {
     throw UsageError("--segmentation: unknown source '" + opt.segmentation +
                      "' (expected none, ground_truth, yolo or precomputed)");
   }
   if (opt.segmentation == "yolo" && opt.model.empty()) throw UsageError("--segmentation yolo needs --model ONNX");
-  if (opt.segmentation == "precomputed" && opt.masks.empty()) throw UsageError("--segmentation precomputed needs --masks DIR");
+  if (opt.segmentation == "precomputed" && opt.masks.empty())
+    throw UsageError("--segmentation precomputed needs --masks DIR");
   if (!opt.vocabulary.empty()) {
     std::fprintf(stderr, "%s: note: --vocabulary is accepted but loop closing is not wired in yet\n", kProgram);
   }
@@ -340,7 +342,8 @@ int run(Options opt) {
   if (opt.dataset.empty()) {
     const int frames = opt.frames > 0 ? opt.frames : kDefaultPresetFrames;
     if (opt.segmentation == "precomputed") throw UsageError("--segmentation precomputed needs --dataset");
-    auto rendered = std::make_unique<RenderedSource>(kDefaultPreset, frames, opt.seed, opt.segmentation == "ground_truth");
+    auto rendered =
+        std::make_unique<RenderedSource>(kDefaultPreset, frames, opt.seed, opt.segmentation == "ground_truth");
     const cge::sim::PinholeCamera& cam = rendered->camera();
     intrinsics = {cam.fx_px, cam.fy_px, cam.cx_px, cam.cy_px};
     settings.frame.depth_units_per_metre = cam.depth_units_per_metre;
@@ -421,8 +424,8 @@ int run(Options opt) {
   out.commit();
 
   std::printf("%s: %d frames, %d tracked, %d lost, %d keyframes; wrote %s in %.1f s\n", kProgram, n,
-              summary["tracked_frames"].get<int>(), summary["lost_frames"].get<int>(),
-              system.map().keyframe_count(), opt.out.c_str(), elapsed_s());
+              summary["tracked_frames"].get<int>(), summary["lost_frames"].get<int>(), system.map().keyframe_count(),
+              opt.out.c_str(), elapsed_s());
   std::fflush(stdout);
   if (std::ferror(stdout)) {
     std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);

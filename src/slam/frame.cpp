@@ -13,9 +13,7 @@
 namespace cge {
 namespace slam {
 
-int Frame::count(FeatureLabel label) const {
-  return static_cast<int>(std::count(labels.begin(), labels.end(), label));
-}
+int Frame::count(FeatureLabel label) const { return static_cast<int>(std::count(labels.begin(), labels.end(), label)); }
 
 std::uint64_t frame_seed(std::uint64_t seed, int frame_index) {
   // splitmix64 of the seed advanced by the index: distinct, well-mixed seeds per frame.
@@ -37,9 +35,8 @@ FrameMaker::FrameMaker(const SystemSettings& settings, const PinholeIntrinsics<d
 
 std::vector<cv::KeyPoint> FrameMaker::detect(const cv::Mat& gray, int fast_threshold, cv::Mat& descriptors) const {
   const OrbSettings& o = settings_.frame.orb;
-  cv::Ptr<cv::ORB> orb = cv::ORB::create(o.features, static_cast<float>(o.scale_factor), o.levels,
-                                         o.edge_threshold_px, 0, 2, cv::ORB::HARRIS_SCORE, o.patch_size_px,
-                                         fast_threshold);
+  cv::Ptr<cv::ORB> orb = cv::ORB::create(o.features, static_cast<float>(o.scale_factor), o.levels, o.edge_threshold_px,
+                                         0, 2, cv::ORB::HARRIS_SCORE, o.patch_size_px, fast_threshold);
   std::vector<cv::KeyPoint> keypoints;
   orb->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
   return keypoints;

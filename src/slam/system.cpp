@@ -126,6 +126,17 @@ void System::decide_keyframe(Frame& frame, TrackResult& track, std::size_t recor
   image.height_px = frame.image_size.height;
   const FrameSummary<double> summary =
       grid_source.summarise(frame.index, image, static_keypoints, frame.instances, track.inliers);
+  // ORB-SLAM2 compares with the reference keyframe's well-observed points, as they are now.
+  const int reference = tracker_.reference_keyframe();
+  if (keyframe_policy_.reference_id() != kNoFrame && reference >= 0) {
+    const int min_obs = map_.keyframe_count() <= 2 ? std::min(2, settings_.mapping.reference_min_observations)
+                                                   : settings_.mapping.reference_min_observations;
+    int well_observed = 0;
+    for (const std::int64_t p : map_.keyframe(reference).map_point_ids) {
+      well_observed += p >= 0 && static_cast<int>(map_.map_point(p).observations.size()) >= min_obs;
+    }
+    keyframe_policy_.set_reference_tracked_points(well_observed);
+  }
   const KeyframeDecision<double> decision = keyframe_policy_.step(summary);
   if (track.state == TrackingState::initialised && decision.keyframe_id != frame.index) {
     throw std::logic_error("System: the keyframe policy did not take the first frame");
@@ -185,7 +196,6 @@ int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::s
       map_.add_observation(point, id, i);
     }
   }
-  keyframe_policy_.set_reference_tracked_points(map_.observed_points(id));
   tracker_.set_reference_keyframe(id);
   FrameRecord& r = records_[record];
   r.keyframe_id = id;

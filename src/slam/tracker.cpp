@@ -30,9 +30,9 @@ const char* to_string(TrackingState state) {
 
 namespace {
 
-constexpr int kGridCellPx = 16;          // bucket size of the keypoint grid, pixels
-constexpr int kMinPnpPoints = 6;         // fewer correspondences cannot give a RANSAC pose
-constexpr double kMinPointDepthM = 0.05; // map points closer to the camera are not projected
+constexpr int kGridCellPx = 16;           // bucket size of the keypoint grid, pixels
+constexpr int kMinPnpPoints = 6;          // fewer correspondences cannot give a RANSAC pose
+constexpr double kMinPointDepthM = 0.05;  // map points closer to the camera are not projected
 
 /// The static keypoints of a frame bucketed by pixel, for window queries.
 class KeypointGrid {
@@ -92,7 +92,10 @@ struct Tracker::Attempt {
 };
 
 Tracker::Tracker(const TrackerSettings& settings, const PinholeIntrinsics<double>& intrinsics, double orb_scale_factor)
-    : settings_(settings), intrinsics_(intrinsics), orb_scale_factor_(orb_scale_factor), refiner_(settings.refinement) {}
+    : settings_(settings),
+      intrinsics_(intrinsics),
+      orb_scale_factor_(orb_scale_factor),
+      refiner_(settings.refinement) {}
 
 std::vector<std::int64_t> Tracker::local_map_points(const Map& map) const {
   std::set<int> keyframes;
@@ -155,8 +158,8 @@ int Tracker::match_by_projection(const Frame& frame, const Map& map, const std::
   return static_cast<int>(std::count_if(matches.begin(), matches.end(), [](std::int64_t m) { return m >= 0; }));
 }
 
-bool Tracker::ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches,
-                          int min_inliers, Eigen::Isometry3d& T_world_camera) const {
+bool Tracker::ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches, int min_inliers,
+                          Eigen::Isometry3d& T_world_camera) const {
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
   for (std::size_t i = 0; i < matches.size(); ++i) {
@@ -244,7 +247,8 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
   }
   if (query_index.empty()) return false;
   cv::Mat query(static_cast<int>(query_index.size()), frame.descriptors.cols, frame.descriptors.type());
-  for (std::size_t q = 0; q < query_index.size(); ++q) frame.descriptors.row(query_index[q]).copyTo(query.row(static_cast<int>(q)));
+  for (std::size_t q = 0; q < query_index.size(); ++q)
+    frame.descriptors.row(query_index[q]).copyTo(query.row(static_cast<int>(q)));
   cv::BFMatcher matcher(cv::NORM_HAMMING);
   const int n = map.keyframe_count();
   for (int id = n - 1; id >= std::max(0, n - settings_.relocalisation_keyframes); --id) {
@@ -305,8 +309,8 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
     T_last_current_velocity_ = Eigen::Isometry3d::Identity();  // the motion model is stale now
     return result;
   }
-  T_last_current_velocity_ =
-      state == TrackingState::tracked ? T_world_last_.inverse() * attempt.T_world_camera : Eigen::Isometry3d::Identity();
+  T_last_current_velocity_ = state == TrackingState::tracked ? T_world_last_.inverse() * attempt.T_world_camera
+                                                             : Eigen::Isometry3d::Identity();
   T_world_last_ = attempt.T_world_camera;
   result.state = state;
   result.T_world_camera = attempt.T_world_camera;

@@ -30,7 +30,7 @@ struct Frame {
   std::vector<Eigen::Vector3d> points_camera_m;  ///< back-projected; NaN where depth is missing
 
   std::vector<SemanticInstance<double>> instances;  ///< every segmented instance (all classes)
-  cv::Mat dynamic_mask;  ///< CV_8UC1, 255 on dynamic instances; empty when none was given
+  cv::Mat dynamic_mask;                             ///< CV_8UC1, 255 on dynamic instances; empty when none was given
 
   cv::Mat bgr;      ///< the colour image (shared with the caller's Mat, not copied)
   cv::Mat depth_m;  ///< CV_32FC1 metres, 0 where invalid

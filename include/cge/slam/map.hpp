@@ -27,7 +27,7 @@ struct Observation {
 struct MapPoint {
   std::int64_t id = -1;
   Eigen::Vector3d position_world = Eigen::Vector3d::Zero();  ///< metres
-  cv::Mat descriptor;  ///< 1 x 32 CV_8UC1: the descriptor of the keypoint that created the point
+  cv::Mat descriptor;                     ///< 1 x 32 CV_8UC1: the descriptor of the keypoint that created the point
   std::vector<Observation> observations;  ///< in insertion order
 };
 

@@ -52,10 +52,10 @@ inline KeyframePolicyKind keyframe_policy_of(DynamicMode mode) {
 
 /// ORB extractor (the ORBextractor.* keys of an ORB-SLAM2 settings file).
 struct OrbSettings {
-  int features = 1000;             ///< nFeatures: keypoints per frame (ORB-SLAM2 TUM: 1000)
-  double scale_factor = 1.2;       ///< scaleFactor: pyramid scale between levels, > 1
-  int levels = 8;                  ///< nLevels: pyramid levels, >= 1
-  int initial_fast_threshold = 20; ///< iniThFAST: FAST threshold, intensity levels
+  int features = 1000;              ///< nFeatures: keypoints per frame (ORB-SLAM2 TUM: 1000)
+  double scale_factor = 1.2;        ///< scaleFactor: pyramid scale between levels, > 1
+  int levels = 8;                   ///< nLevels: pyramid levels, >= 1
+  int initial_fast_threshold = 20;  ///< iniThFAST: FAST threshold, intensity levels
   /// minThFAST: used for a second detection when the first finds fewer than `features` keypoints
   /// (cv::ORB has one threshold per call, not ORB-SLAM2's per-cell fallback).
   int min_fast_threshold = 7;
@@ -76,16 +76,16 @@ struct FrameSettings {
 
 /// Tracking: prediction, matching to the local map, PnP, quality check, relocalisation.
 struct TrackerSettings {
-  int local_recent_keyframes = 5;     ///< local map: the last keyframes, count
-  int local_covisible_keyframes = 10; ///< local map: covisible keyframes of the reference keyframe, count
-  double search_radius_px = 15;       ///< matching: window around a projected map point, pixels
+  int local_recent_keyframes = 5;      ///< local map: the last keyframes, count
+  int local_covisible_keyframes = 10;  ///< local map: covisible keyframes of the reference keyframe, count
+  double search_radius_px = 15;        ///< matching: window around a projected map point, pixels
   /// When fewer than min_matches are found, matching is repeated once with a radius this many
   /// times larger (a sudden change of motion), dimensionless.
   double wide_search_factor = 3;
-  int max_hamming = 64;        ///< matching: largest descriptor distance accepted, bits of 256
-  double ratio = 0.9;          ///< matching: best distance < ratio * second best (within the window)
-  int min_matches = 20;        ///< fewer matches than this: try the wide search, then relocalise
-  int pnp_iterations = 100;    ///< RANSAC iterations of cv::solvePnPRansac
+  int max_hamming = 64;              ///< matching: largest descriptor distance accepted, bits of 256
+  double ratio = 0.9;                ///< matching: best distance < ratio * second best (within the window)
+  int min_matches = 20;              ///< fewer matches than this: try the wide search, then relocalise
+  int pnp_iterations = 100;          ///< RANSAC iterations of cv::solvePnPRansac
   double pnp_reprojection_px = 3.0;  ///< RANSAC inlier threshold, pixels
   double pnp_confidence = 0.99;      ///< RANSAC confidence, in (0, 1)
   /// Inliers under this after refinement: the frame is lost (ORB-SLAM2 RGB-D: 30 in the local map).
@@ -99,7 +99,7 @@ struct TrackerSettings {
   /// The first frame initialises the map only with at least this many static keypoints with
   /// depth (ORB-SLAM2 RGB-D: 500); with fewer it is reported lost and the next frame tries.
   int min_initial_points = 100;
-  int relocalisation_keyframes = 10;  ///< relocalisation tries the last keyframes, count
+  int relocalisation_keyframes = 10;    ///< relocalisation tries the last keyframes, count
   int min_relocalisation_inliers = 50;  ///< PnP inliers to accept a relocalisation
 };
 
@@ -107,6 +107,10 @@ struct TrackerSettings {
 struct MappingSettings {
   /// New map points only from keypoints closer than this, metres (depth noise grows with range).
   double max_new_point_depth_m = 5.0;
+  /// ORB-SLAM2's nMinObs: the keyframe policy compares a frame's tracked points with the reference
+  /// keyframe's map points seen by at least this many keyframes (2 while the map has at most 2
+  /// keyframes, as ORB-SLAM2), >= 1. 1 counts every point of the reference keyframe.
+  int reference_min_observations = 3;
 };
 
 /// Everything the System needs. Validate with validate(); throws std::invalid_argument naming a field.
@@ -117,7 +121,7 @@ struct SystemSettings {
   MappingSettings mapping;
   PatchKeyframeSettings<double> patch_keyframes;        ///< mode YMK
   OrbSlam2KeyframeSettings<double> orbslam2_keyframes;  ///< modes none, Y, YM
-  std::uint64_t seed = 0;  ///< the MAD filter's samples: frame i uses a seed derived from (seed, i)
+  std::uint64_t seed = 0;             ///< the MAD filter's samples: frame i uses a seed derived from (seed, i)
   bool keep_keyframe_images = false;  ///< keep bgr/depth in keyframes (for the dense maps of issue 6)
 
   void validate() const {
@@ -147,6 +151,7 @@ struct SystemSettings {
     if (t.relocalisation_keyframes < 0) fail("tracker.relocalisation_keyframes must not be negative");
     if (t.min_relocalisation_inliers < 4) fail("tracker.min_relocalisation_inliers must be at least 4");
     if (!(mapping.max_new_point_depth_m > 0)) fail("mapping.max_new_point_depth_m must be > 0");
+    if (mapping.reference_min_observations < 1) fail("mapping.reference_min_observations must be at least 1");
     patch_keyframes.validate();
     orbslam2_keyframes.validate();
   }

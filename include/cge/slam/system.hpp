@@ -42,7 +42,16 @@ struct FrameInput {
 };
 
 /// Stages timed per frame, in the column order of timings.csv.
-enum class Stage : int { segmentation, features, dynamic_filter, tracking, keyframe, loop_closing, optimisation, total };
+enum class Stage : int {
+  segmentation,
+  features,
+  dynamic_filter,
+  tracking,
+  keyframe,
+  loop_closing,
+  optimisation,
+  total
+};
 constexpr int kStageCount = 8;
 /// "segmentation", "features", ... "total".
 const char* to_string(Stage stage);
@@ -61,7 +70,7 @@ struct FrameRecord {
   int instances = 0;  ///< segmented instances, all classes
   int matches = 0;
   int inliers = 0;
-  int keyframe_id = -1;  ///< the keyframe made from this frame (possibly decided a few frames later)
+  int keyframe_id = -1;                ///< the keyframe made from this frame (possibly decided a few frames later)
   const char* keyframe_rule = "none";  ///< the policy rule that made it one
   std::array<double, kStageCount> times_ms{};  ///< per Stage, milliseconds (measurements)
 
@@ -78,7 +87,8 @@ struct LoopRecord {
   double cge_score = 0;
   int matched_points = 0;
   bool accepted = false;
-  std::string reason = "no_candidates";  ///< accepted, no_candidates, low_score, continuity, too_few_matches, pose_not_robust
+  std::string reason =
+      "no_candidates";  ///< accepted, no_candidates, low_score, continuity, too_few_matches, pose_not_robust
 };
 
 class System {

@@ -39,7 +39,7 @@ const char* to_string(TrackingState state);
 struct TrackResult {
   TrackingState state = TrackingState::lost;
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  ///< meaningful unless lost
-  int matches = 0;  ///< map points matched before PnP
+  int matches = 0;                                                   ///< map points matched before PnP
   int inliers = 0;  ///< matches consistent with the final pose (the tracked map points)
   /// Per keypoint of the frame: the map point it was matched to (inliers only), -1 otherwise.
   std::vector<std::int64_t> map_point_ids;
