@@ -83,6 +83,7 @@ struct Options {
   std::string vocabulary;
   std::uint64_t seed = 0;
   int frames = 0;  // 0: all (dataset) or kDefaultPresetFrames (rendered)
+  int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   std::string out;
   bool force = false;
 };
@@ -318,6 +319,7 @@ int run(Options opt) {
     throw UsageError(std::string("--mode: ") + e.what());
   }
   settings.seed = opt.seed;
+  settings.mapping.reference_min_observations = opt.reference_min_observations;
   if (opt.frames < 0) throw UsageError("--frames must not be negative, got " + std::to_string(opt.frames));
   if (opt.out.empty()) throw UsageError("--out must name a folder");
   if (opt.segmentation.empty())
@@ -456,6 +458,10 @@ int main(int argc, char** argv) {
   app.add_option("--vocabulary", opt.vocabulary, "bag-of-words vocabulary for loop closing");
   app.add_option("--seed", opt.seed, "seed of the MAD samples (and of the rendered sequence)")->capture_default_str();
   app.add_option("--frames", opt.frames, "process at most this many frames (rendered: default 300)");
+  app.add_option("--reference-min-observations", opt.reference_min_observations,
+                 "ORB-SLAM2 keyframe baseline: count the reference keyframe's map points seen by >= this many "
+                 "keyframes (ORB-SLAM2's nMinObs)")
+      ->capture_default_str();
   app.add_option("--out", opt.out, "output folder; must not exist or be empty, unless --force")->required();
   app.add_flag("--force", opt.force, "write into a non-empty folder: replace cge_slam's own files, delete nothing");
 

@@ -126,7 +126,7 @@ void System::decide_keyframe(Frame& frame, TrackResult& track, std::size_t recor
   image.height_px = frame.image_size.height;
   const FrameSummary<double> summary =
       grid_source.summarise(frame.index, image, static_keypoints, frame.instances, track.inliers);
-  // ORB-SLAM2 compares with the reference keyframe's well-observed points, as they are now.
+  // The baseline compares with the reference keyframe's (well-observed) points, as they are now.
   const int reference = tracker_.reference_keyframe();
   if (keyframe_policy_.reference_id() != kNoFrame && reference >= 0) {
     const int min_obs = map_.keyframe_count() <= 2 ? std::min(2, settings_.mapping.reference_min_observations)
