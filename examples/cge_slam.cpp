@@ -2,7 +2,7 @@
 // walking_xyz synthetic preset rendered in memory. Writes into --out:
 //   trajectory.txt  every tracked frame, TUM format (T_world_camera)
 //   keyframes.txt   the keyframes, TUM format
-//   loops.csv       the loop closer's decisions (header only while loop closing is not wired in)
+//   loops.csv       the loop closer's decisions (with --vocabulary; header only without it)
 //   frames.csv      per frame: tracking state, features, dynamic labels, matches, keyframe
 //   timings.csv     per frame and stage, milliseconds
 //   summary.json    counts, the run's settings and mean/median time per stage
@@ -48,6 +48,7 @@
 #include "cge/sim/renderer.hpp"
 #include "cge/sim/segmentation_error_model.hpp"
 #include "cge/slam/label_instances.hpp"
+#include "cge/slam/loop_closer.hpp"
 #include "cge/slam/output_files.hpp"
 #include "cge/slam/system.hpp"
 
@@ -332,8 +333,9 @@ int run(Options opt) {
   if (opt.segmentation == "yolo" && opt.model.empty()) throw UsageError("--segmentation yolo needs --model ONNX");
   if (opt.segmentation == "precomputed" && opt.masks.empty())
     throw UsageError("--segmentation precomputed needs --masks DIR");
+  std::unique_ptr<cge::bow::Vocabulary> vocabulary;
   if (!opt.vocabulary.empty()) {
-    std::fprintf(stderr, "%s: note: --vocabulary is accepted but loop closing is not wired in yet\n", kProgram);
+    vocabulary = std::make_unique<cge::bow::Vocabulary>(cge::bow::Vocabulary::load_file(opt.vocabulary));
   }
 
   cge::PinholeIntrinsics<double> intrinsics;
@@ -396,6 +398,10 @@ int run(Options opt) {
   const bool own_instances = source->provides_instances() && cge::slam::uses_masks(settings.mode);
   for (int i = 0; i < n; ++i) {
     const cge::slam::FrameInput input = source->frame(i);
+    if (i == 0 && vocabulary != nullptr) {
+      system.set_loop_closer(
+          std::make_unique<cge::slam::LoopCloser>(std::move(*vocabulary), intrinsics, input.bgr.cols, input.bgr.rows));
+    }
     if (own_instances) {
       const auto seg_start = std::chrono::steady_clock::now();
       const std::vector<cge::SegmentedInstance> instances = source->instances(i);
@@ -455,7 +461,8 @@ int main(int argc, char** argv) {
   app.add_option("--model", opt.model, "YOLOv8-seg ONNX model (--segmentation yolo)");
   app.add_option("--masks", opt.masks, "mask folder (--segmentation precomputed)");
   app.add_option("--settings", opt.settings, "ORB-SLAM2 TUM YAML settings (default: DATASET/camera.yaml)");
-  app.add_option("--vocabulary", opt.vocabulary, "bag-of-words vocabulary for loop closing");
+  app.add_option("--vocabulary", opt.vocabulary,
+                 "bag-of-words vocabulary (cge_vocab) enabling loop closing; detections only, no correction yet");
   app.add_option("--seed", opt.seed, "seed of the MAD samples (and of the rendered sequence)")->capture_default_str();
   app.add_option("--frames", opt.frames, "process at most this many frames (rendered: default 300)");
   app.add_option("--reference-min-observations", opt.reference_min_observations,

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "cge/opencv/keypoint.hpp"
+#include "cge/slam/loop_closer.hpp"
 
 namespace cge {
 namespace slam {
@@ -52,6 +53,15 @@ System::System(const SystemSettings& settings, const PinholeIntrinsics<double>& 
       frame_maker_(settings, intrinsics),
       tracker_(settings.tracker, intrinsics, settings.frame.orb.scale_factor),
       keyframe_policy_(keyframe_policy_of(settings.mode), settings.patch_keyframes, settings.orbslam2_keyframes) {}
+
+System::~System() = default;
+System::System(System&&) noexcept = default;
+System& System::operator=(System&&) noexcept = default;
+
+void System::set_loop_closer(std::unique_ptr<LoopCloser> loop_closer) {
+  if (map_.keyframe_count() > 0) throw std::logic_error("System::set_loop_closer: the map has keyframes already");
+  loop_closer_ = std::move(loop_closer);
+}
 
 const FrameRecord& System::process(const FrameInput& input) {
   std::vector<SegmentedInstance> instances;
@@ -205,11 +215,26 @@ int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::s
 }
 
 void System::after_keyframe_inserted(int keyframe_id) {
-  // Loop closing and optimisation (ALGORITHMS.md section 7) plug in here: the loop closer reads
-  // map_ (a KeyframeDatabaseView), appends a LoopRecord to loops_ and, on acceptance, corrects
-  // keyframe poses and map points through map_.set_keyframe_pose / set_map_point_position. Time
-  // them into the current record's loop_closing and optimisation stages.
-  static_cast<void>(keyframe_id);
+  // Loop closing (ALGORITHMS.md section 7): the closer reads map_ (a KeyframeDatabaseView) and
+  // its decision becomes a LoopRecord. The correction of an accepted loop (pose-graph
+  // optimisation, then bundle adjustment, through map_.set_keyframe_pose / set_map_point_position)
+  // belongs here too, timed as the optimisation stage.
+  if (loop_closer_ == nullptr) return;
+  const auto start = Clock::now();
+  const Keyframe& kf = map_.keyframe(keyframe_id);
+  const LoopDecision d = loop_closer_->process(kf, map_);
+  LoopRecord r;
+  r.query_keyframe = keyframe_id;
+  r.query_timestamp_s = kf.timestamp_s;
+  r.match_keyframe = d.match_keyframe;
+  if (d.match_keyframe >= 0) r.match_timestamp_s = map_.keyframe(d.match_keyframe).timestamp_s;
+  r.bow_score = d.bow_score;
+  r.cge_score = d.cge_score;
+  r.matched_points = d.matched_points;
+  r.accepted = d.accepted;
+  r.reason = to_string(d.reason);
+  loops_.push_back(std::move(r));
+  time_of(records_.back(), Stage::loop_closing) += elapsed_ms(start);
 }
 
 void System::finish() {

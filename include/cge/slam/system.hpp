@@ -91,12 +91,22 @@ struct LoopRecord {
       "no_candidates";  ///< accepted, no_candidates, low_score, continuity, too_few_matches, pose_not_robust
 };
 
+class LoopCloser;
+
 class System {
  public:
   /// Throws std::invalid_argument for bad settings or intrinsics. `segmenter` may be null: no
   /// instances (modes Y/YM/YMK then behave as none, apart from the keyframe policy).
   System(const SystemSettings& settings, const PinholeIntrinsics<double>& intrinsics,
          std::unique_ptr<InstanceSegmenter> segmenter = nullptr);
+  ~System();
+  System(System&&) noexcept;
+  System& operator=(System&&) noexcept;
+
+  /// Enables loop closing (section 7): after each keyframe insertion the closer processes the new
+  /// keyframe and its decision becomes a LoopRecord. Accepted loops are recorded, not yet corrected
+  /// (pose-graph optimisation is not wired in). Set it before the first frame.
+  void set_loop_closer(std::unique_ptr<LoopCloser> loop_closer);
 
   /// One frame, segmented by the owned segmenter (not in mode none). Throws std::invalid_argument
   /// for bad images (the message names the frame) or a frame index not greater than the last.
@@ -139,6 +149,7 @@ class System {
   std::vector<FrameRecord> records_;
   std::vector<LoopRecord> loops_;
   std::deque<Pending> pending_;
+  std::unique_ptr<LoopCloser> loop_closer_;
 };
 
 }  // namespace slam

@@ -1,0 +1,201 @@
+// cge_vocab: trains a bag-of-words vocabulary for ORB descriptors (cge::bow::Vocabulary) from a
+// folder of images, a list file (one image path per line, or a TUM rgb.txt: "timestamp path"), or
+// a synthetic sequence rendered in memory, and writes it in the text format of
+// docs/LOOP_CLOSING.md. Same arguments, same file.
+//
+// Exit codes: 0 done, 2 bad arguments or input (nothing written), 1 other failure.
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "cge/sim/frame_source.hpp"
+#include "cge/sim/presets.hpp"
+#include "cge/sim/renderer.hpp"
+#include "cge/slam/vocabulary_training.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kProgram = "cge_vocab";
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;
+constexpr int kExitUsage = 2;
+
+struct Options {
+  std::string images_dir;
+  std::string list_file;
+  std::string preset;
+  int preset_frames = 30;
+  std::uint64_t preset_seed = 1;
+  std::string out;
+  bool force = false;
+  int step = 1;
+  int max_images = 0;
+  cge::slam::VocabularyTrainingSettings training;
+};
+
+bool is_image_name(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".ppm" || ext == ".pgm" ||
+         ext == ".tif" || ext == ".tiff";
+}
+
+std::vector<std::string> images_in_folder(const std::string& dir) {
+  if (!fs::is_directory(dir)) throw std::invalid_argument("--images: " + dir + " is not a folder");
+  std::vector<std::string> paths;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.is_regular_file() && is_image_name(e.path())) paths.push_back(e.path().string());
+  }
+  std::sort(paths.begin(), paths.end());
+  if (paths.empty()) throw std::invalid_argument("--images: no image files (png, jpg, bmp, ppm, pgm, tif) in " + dir);
+  return paths;
+}
+
+/// One path per line, or "timestamp path" (TUM rgb.txt); '#' starts a comment line; relative paths
+/// are relative to the list file's folder.
+std::vector<std::string> images_in_list(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw std::invalid_argument("--list: cannot open " + file);
+  const fs::path base = fs::path(file).parent_path();
+  std::vector<std::string> paths;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const auto first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream fields(line);
+    std::vector<std::string> tokens;
+    for (std::string t; fields >> t;) tokens.push_back(t);
+    if (tokens.size() > 2) {
+      throw std::invalid_argument(file + ":" + std::to_string(line_no) +
+                                  ": expected \"path\" or \"timestamp path\", found " + std::to_string(tokens.size()) +
+                                  " fields");
+    }
+    const fs::path p = tokens.back();
+    paths.push_back((p.is_absolute() ? p : base / p).string());
+  }
+  if (paths.empty()) throw std::invalid_argument("--list: " + file + " lists no images");
+  return paths;
+}
+
+int run(const Options& opt) {
+  const int sources = (opt.images_dir.empty() ? 0 : 1) + (opt.list_file.empty() ? 0 : 1) + (opt.preset.empty() ? 0 : 1);
+  if (sources != 1) throw std::invalid_argument("give exactly one of --images, --list, --preset");
+  if (fs::exists(opt.out) && !opt.force) {
+    throw std::invalid_argument("--out: " + opt.out + " exists; pass --force to overwrite it");
+  }
+  if (fs::is_directory(opt.out)) throw std::invalid_argument("--out: " + opt.out + " is a folder");
+  opt.training.vocabulary.validate();
+
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<cv::Mat> images;
+  std::string source;
+  if (!opt.preset.empty()) {
+    const cge::sim::SequenceRenderer renderer(cge::sim::make_preset(opt.preset, opt.preset_frames, opt.preset_seed));
+    for (int i = 0; i < renderer.frame_count(); i += opt.step) images.push_back(renderer.render(i).rgb);
+    source = "preset " + opt.preset + " (" + std::to_string(opt.preset_frames) + " frames, seed " +
+             std::to_string(opt.preset_seed) + ")";
+  } else {
+    const std::vector<std::string> paths =
+        opt.images_dir.empty() ? images_in_list(opt.list_file) : images_in_folder(opt.images_dir);
+    for (std::size_t i = 0; i < paths.size(); i += static_cast<std::size_t>(opt.step)) {
+      if (opt.max_images > 0 && static_cast<int>(images.size()) >= opt.max_images) break;
+      cv::Mat img = cv::imread(paths[i], cv::IMREAD_COLOR);
+      if (img.empty()) throw std::invalid_argument("cannot read the image " + paths[i]);
+      images.push_back(img);
+    }
+    source = opt.images_dir.empty() ? opt.list_file : opt.images_dir;
+  }
+  if (opt.max_images > 0 && static_cast<int>(images.size()) > opt.max_images)
+    images.resize(static_cast<std::size_t>(opt.max_images));
+
+  // The same steps as cge::slam::train_vocabulary, unrolled to count the descriptors.
+  std::vector<std::vector<cge::bow::BinaryDescriptor>> documents;
+  std::size_t descriptors = 0;
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    documents.push_back(cge::slam::orb_descriptors(images[i], opt.training.orb_features));
+    descriptors += documents.back().size();
+  }
+  std::mt19937_64 engine(opt.training.seed);
+  const cge::bow::Vocabulary v = cge::bow::Vocabulary::train(documents, opt.training.vocabulary, engine);
+  v.save_file(opt.out, opt.force);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::printf("source %s\n", source.c_str());
+  std::printf("images %zu\n", images.size());
+  std::printf("descriptors %zu\n", descriptors);
+  std::printf("branching %d\ndepth %d\nseed %llu\n", v.branching(), v.depth(),
+              static_cast<unsigned long long>(opt.training.seed));
+  std::printf("nodes %zu\nwords %zu\n", v.node_count(), v.word_count());
+  std::printf("seconds %.2f\n", seconds);
+  std::printf("output %s\n", opt.out.c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  CLI::App app{"Trains a bag-of-words vocabulary for ORB descriptors (cge " CGE_VERSION_STRING
+               ") and writes it in the text format of docs/LOOP_CLOSING.md. Same arguments, same file.",
+               kProgram};
+  app.set_version_flag("--version", std::string(kProgram) + " " + CGE_VERSION_STRING);
+  app.add_option("--images", opt.images_dir, "folder of images (png, jpg, bmp, ppm, pgm, tif), used in name order");
+  app.add_option("--list", opt.list_file, "list file: one image path per line, or a TUM rgb.txt");
+  app.add_option("--preset", opt.preset, "render this synthetic preset in memory instead (e.g. walking_xyz)");
+  app.add_option("--frames", opt.preset_frames, "--preset: frames to render, >= 1")->capture_default_str();
+  app.add_option("--preset-seed", opt.preset_seed, "--preset: the scene's seed")->capture_default_str();
+  app.add_option("--out", opt.out, "vocabulary file to write; an existing file only with --force")->required();
+  app.add_flag("--force", opt.force, "overwrite --out when it exists");
+  app.add_option("--features", opt.training.orb_features, "ORB features per image, >= 1")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--branching,-k", opt.training.vocabulary.branching, "children per node k, >= 2")
+      ->check(CLI::Range(2, 1000))
+      ->capture_default_str();
+  app.add_option("--depth,-L", opt.training.vocabulary.depth, "levels below the root L, >= 1")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
+  app.add_option("--iterations", opt.training.vocabulary.max_iterations, "k-medians rounds per node at most")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--seed", opt.training.seed, "seed of the k-means++ draws")->capture_default_str();
+  app.add_option("--step", opt.step, "use every step-th image, >= 1")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--max-images", opt.max_images, "use at most this many images (0: all)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
+    return kExitUsage;
+  }
+  try {
+    return run(opt);
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitFailure;
+  }
+}

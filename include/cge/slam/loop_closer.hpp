@@ -1,0 +1,174 @@
+#pragma once
+// LoopCloser: loop detection and verification over keyframes (ALGORITHMS.md section 7, steps 1-4;
+// step 5, the correction, belongs to the optimisers). process() is called once per new keyframe, in
+// id order; it keeps a BoW entry and cached graph entropies of every keyframe it has seen.
+//
+// Steps for the current keyframe K (docs/LOOP_CLOSING.md):
+//  1. Candidates: keyframes sharing words with K (BowModel::query), neither covisible with K nor
+//     among the `recent_keyframes_excluded` keyframes before it, with at least
+//     `min_common_words_ratio` of the best such keyframe's common-word count.
+//  2. Groups: each candidate with its `group_size` best covisible keyframes (the excluded ones left
+//     out).
+//  3. Scores: every group member against K: S_sum of CGESimilarity (mode cge), the BoW score
+//     (bow_only), or S_sum times the BoW score relative to the best candidate's (combined). Each
+//     group keeps its total and its best member; the best member of the best-total group is the
+//     match; it must reach the mode's threshold (else low_score).
+//  4. Continuity: a group is consistent with an earlier one when they share a keyframe; the match
+//     is kept only when the groups of `consistent_keyframes` consecutive keyframes (K included)
+//     passed step 3 and chain (ORB-SLAM2's consistent groups); else continuity.
+//  5. Geometry: static features of K matched to static features with depth of the match by
+//     descriptor; more than `min_matched_points` matches (else too_few_matches); PnP RANSAC of the
+//     match's 3-D points (points_camera_m) to K's pixels; more than `min_matched_points` inliers
+//     (else pose_not_robust); T_match_query is the result.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "cge/bow/vocabulary.hpp"
+#include "cge/core/pinhole_intrinsics.hpp"
+#include "cge/entropy/cge_similarity.hpp"
+#include "cge/slam/bow_model.hpp"
+#include "cge/slam/keyframe.hpp"
+#include "cge/slam/keyframe_database_view.hpp"
+
+namespace cge {
+namespace slam {
+
+/// What decides among the candidates (step 3).
+enum class LoopScoring {
+  cge,       ///< BoW proposes candidates, CGE's S_sum decides (the paper)
+  bow_only,  ///< the BoW score decides (ORB-SLAM2-like; for comparison)
+  combined,  ///< S_sum x (BoW score / best candidate's BoW score)
+};
+
+/// "cge", "bow_only", "combined".
+const char* to_string(LoopScoring scoring);
+/// The inverse; throws std::invalid_argument naming the known values.
+LoopScoring loop_scoring_from_string(const std::string& name);
+
+/// Which dynamic masks decide a keypoint's stability in the frame graphs.
+enum class GraphStability {
+  own_mask,    ///< the keyframe's own mask only: one graph per keyframe, computed once and cached
+  both_masks,  ///< own and partner's mask (ALGORITHMS.md section 3, exact): two graphs per pair
+};
+
+struct LoopCloserSettings {
+  /// Step 3 ranking. Default combined: measured better than cge on the loop presets
+  /// (docs/LOOP_CLOSING.md); cge is the paper's ranking, bow_only the baseline.
+  LoopScoring scoring = LoopScoring::combined;
+  /// Step 1: candidates need at least this fraction of the best common-word count (ORB-SLAM2: 0.8).
+  double min_common_words_ratio = 0.8;
+  /// Step 1: the keyframes with ids in [K - this, K) are never candidates (too recent to be a loop).
+  int recent_keyframes_excluded = 10;
+  /// Step 2: covisible keyframes added to each candidate's group (paper: 10).
+  int group_size = 10;
+  /// Step 3, modes cge and combined: least S_sum of the match. 0.5 loses no true loop on the loop
+  /// presets while 0.8 already loses some (S_sum barely separates loops; geometry does): see
+  /// docs/LOOP_CLOSING.md.
+  double min_cge_score = 0.5;
+  /// Step 3, mode bow_only: least BoW L1 score of the match.
+  double min_bow_score = 0.05;
+  /// Step 4: consecutive keyframes (the current one included) whose groups must chain; 1 disables.
+  int consistent_keyframes = 3;
+  /// Step 5: Num_th, the matches and PnP inliers needed are MORE than this (paper: 40).
+  int min_matched_points = 40;
+  /// Step 5: largest Hamming distance of a descriptor match, bits (ORB-SLAM2's TH_LOW: 50).
+  int max_descriptor_distance = 50;
+  /// Step 5: Lowe's ratio, best distance < ratio x second best (ORB-SLAM2 uses 0.75 for BoW search).
+  double descriptor_ratio = 0.75;
+  /// Step 5: PnP RANSAC inlier threshold, pixels of reprojection error.
+  double pnp_reprojection_error_px = 4.0;
+  /// Step 5: PnP RANSAC iterations.
+  int pnp_iterations = 300;
+  /// Step 5: PnP RANSAC confidence.
+  double pnp_confidence = 0.999;
+  /// Graph stability masks (GraphStability); own_mask caches each keyframe's entropies.
+  GraphStability graph_stability = GraphStability::own_mask;
+  /// Settings of the graph construction and the similarity (cge/graph, cge/entropy).
+  GraphBuilderSettings<double> graph;
+  CGESimilaritySettings<double> similarity;
+  DegreeDegreeSettings<double> degree_entropy;
+  /// Exponent scaling of the degree-degree entropy: normalised_mean by default (raw, the paper's,
+  /// collapses the entropy on SLAM-sized graphs and ranked worse on the loop presets).
+  ScalingKind exponent_scaling = ScalingKind::normalised_mean;
+
+  /// Throws std::invalid_argument naming the first field out of range.
+  void validate() const;
+};
+
+/// Why a keyframe was (not) accepted; names as loops.csv spells them (to_string).
+enum class LoopReason { accepted, no_candidates, low_score, continuity, too_few_matches, pose_not_robust };
+const char* to_string(LoopReason reason);
+
+struct LoopDecision {
+  int query_keyframe = -1;
+  int match_keyframe = -1;  ///< -1 when there was no candidate
+  double bow_score = 0;     ///< BoW score of the match against the query (0 without a match)
+  double cge_score = 0;     ///< S_sum of the match against the query (computed in every mode)
+  /// Descriptor matches while the geometric check ran: PnP inliers when PnP ran, else the tentative
+  /// matches; 0 before step 5.
+  int matched_points = 0;
+  int tentative_matches = 0;  ///< descriptor matches before RANSAC
+  bool accepted = false;
+  LoopReason reason = LoopReason::no_candidates;
+  int candidates = 0;  ///< candidates after step 1
+  /// Pose of the query camera in the match camera's frame (valid when PnP succeeded).
+  Eigen::Isometry3d T_match_query = Eigen::Isometry3d::Identity();
+  /// PnP inliers: (query keypoint index, match keypoint index).
+  std::vector<std::pair<int, int>> inlier_pairs;
+};
+
+class LoopCloser {
+ public:
+  /// `model` is the BoW policy (not null); `camera` the intrinsics the keypoints were detected with;
+  /// the image size (pixels) defines the graphs' region.
+  LoopCloser(std::unique_ptr<BowModel> model, const PinholeIntrinsics<double>& camera, int image_width_px,
+             int image_height_px, const LoopCloserSettings& settings = {});
+  /// Our model over `vocabulary`.
+  LoopCloser(bow::Vocabulary vocabulary, const PinholeIntrinsics<double>& camera, int image_width_px,
+             int image_height_px, const LoopCloserSettings& settings = {});
+
+  /// Detects and verifies a loop for `current` (its id must equal processed_count()), then adds it.
+  /// Reads earlier keyframes and covisibility through `map` (current must be map.keyframe(current.id)
+  /// or a copy of it). Throws std::invalid_argument for a keyframe whose per-keypoint vectors
+  /// disagree in size, descriptors that are not 32-byte CV_8UC1 rows, or an id out of order.
+  LoopDecision process(const Keyframe& current, const KeyframeDatabaseView& map);
+
+  int processed_count() const { return processed_; }
+  const LoopCloserSettings& settings() const { return settings_; }
+
+ private:
+  struct Group {
+    std::vector<int> members;
+    int consistency = 0;
+  };
+  struct CachedEntropies {
+    bool ready = false;
+    bool has_nodes = false;
+    GraphEntropies<double> entropies;
+  };
+
+  double cge_score(const Keyframe& current, const Keyframe& other);
+  const CachedEntropies& own_entropies(const Keyframe& kf);
+  void geometric_check(const Keyframe& current, const Keyframe& match, LoopDecision& decision) const;
+
+  std::unique_ptr<BowModel> model_;
+  PinholeIntrinsics<double> camera_;
+  ImageRegion<double> image_;
+  LoopCloserSettings settings_;
+  CGESimilarity<double> similarity_;
+  std::vector<CachedEntropies> cache_;
+  std::vector<Group> consistent_groups_;
+  int processed_ = 0;
+};
+
+/// Rows of the keyframe's static features (labels == static_feature), ascending.
+std::vector<int> static_feature_rows(const Keyframe& kf);
+
+}  // namespace slam
+}  // namespace cge

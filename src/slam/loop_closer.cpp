@@ -1,0 +1,410 @@
+#include "cge/slam/loop_closer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/features2d.hpp>
+
+#include "cge/opencv/keypoint.hpp"
+#include "cge/opencv/mask.hpp"
+
+namespace cge {
+namespace slam {
+
+const char* to_string(LoopScoring scoring) {
+  switch (scoring) {
+    case LoopScoring::cge:
+      return "cge";
+    case LoopScoring::bow_only:
+      return "bow_only";
+    case LoopScoring::combined:
+      return "combined";
+  }
+  return "invalid";
+}
+
+LoopScoring loop_scoring_from_string(const std::string& name) {
+  if (name == "cge") return LoopScoring::cge;
+  if (name == "bow_only") return LoopScoring::bow_only;
+  if (name == "combined") return LoopScoring::combined;
+  throw std::invalid_argument("loop scoring \"" + name + "\" is not one of cge, bow_only, combined");
+}
+
+const char* to_string(LoopReason reason) {
+  switch (reason) {
+    case LoopReason::accepted:
+      return "accepted";
+    case LoopReason::no_candidates:
+      return "no_candidates";
+    case LoopReason::low_score:
+      return "low_score";
+    case LoopReason::continuity:
+      return "continuity";
+    case LoopReason::too_few_matches:
+      return "too_few_matches";
+    case LoopReason::pose_not_robust:
+      return "pose_not_robust";
+  }
+  return "invalid";
+}
+
+void LoopCloserSettings::validate() const {
+  auto bad = [](const std::string& what) { throw std::invalid_argument("LoopCloserSettings: " + what); };
+  if (!(min_common_words_ratio >= 0 && min_common_words_ratio <= 1)) bad("min_common_words_ratio must lie in [0, 1]");
+  if (recent_keyframes_excluded < 0) bad("recent_keyframes_excluded must not be negative");
+  if (group_size < 0) bad("group_size must not be negative");
+  if (!std::isfinite(min_cge_score)) bad("min_cge_score must be finite");
+  if (!std::isfinite(min_bow_score)) bad("min_bow_score must be finite");
+  if (consistent_keyframes < 1) bad("consistent_keyframes must be at least 1");
+  if (min_matched_points < 3) bad("min_matched_points must be at least 3 (PnP needs 4 points)");
+  if (max_descriptor_distance < 0 || max_descriptor_distance > 256) bad("max_descriptor_distance must lie in 0 .. 256");
+  if (!(descriptor_ratio > 0 && descriptor_ratio <= 1)) bad("descriptor_ratio must lie in (0, 1]");
+  if (!(pnp_reprojection_error_px > 0)) bad("pnp_reprojection_error_px must be positive");
+  if (pnp_iterations < 1) bad("pnp_iterations must be at least 1");
+  if (!(pnp_confidence > 0 && pnp_confidence < 1)) bad("pnp_confidence must lie in (0, 1)");
+}
+
+std::vector<int> static_feature_rows(const Keyframe& kf) {
+  std::vector<int> rows;
+  for (std::size_t i = 0; i < kf.labels.size(); ++i) {
+    if (kf.labels[i] == FeatureLabel::static_feature) rows.push_back(static_cast<int>(i));
+  }
+  return rows;
+}
+
+namespace {
+
+void check_keyframe(const Keyframe& kf, int width, int height) {
+  std::ostringstream where;
+  where << "LoopCloser: keyframe " << kf.id << ": ";
+  const std::size_t n = kf.keypoints.size();
+  opencv::check_orb_descriptors(kf.descriptors, (where.str() + "descriptors").c_str());
+  if (static_cast<std::size_t>(kf.descriptors.rows) != n) {
+    throw std::invalid_argument(where.str() + std::to_string(kf.descriptors.rows) + " descriptor rows for " +
+                                std::to_string(n) + " keypoints");
+  }
+  if (kf.labels.size() != n) {
+    throw std::invalid_argument(where.str() + std::to_string(kf.labels.size()) + " labels for " + std::to_string(n) +
+                                " keypoints");
+  }
+  if (!kf.points_camera_m.empty() && kf.points_camera_m.size() != n) {
+    throw std::invalid_argument(where.str() + std::to_string(kf.points_camera_m.size()) + " 3-D points for " +
+                                std::to_string(n) + " keypoints (expected one per keypoint, or none)");
+  }
+  if (!kf.dynamic_mask.empty() &&
+      (kf.dynamic_mask.type() != CV_8UC1 || kf.dynamic_mask.cols != width || kf.dynamic_mask.rows != height)) {
+    throw std::invalid_argument(where.str() + "dynamic_mask must be empty or CV_8UC1 of " + std::to_string(width) +
+                                " x " + std::to_string(height) + " pixels");
+  }
+}
+
+std::vector<cv::KeyPoint> select_keypoints(const Keyframe& kf, const std::vector<int>& rows) {
+  std::vector<cv::KeyPoint> out;
+  out.reserve(rows.size());
+  for (int r : rows) out.push_back(kf.keypoints[static_cast<std::size_t>(r)]);
+  return out;
+}
+
+cv::Mat select_rows(const cv::Mat& m, const std::vector<int>& rows) {
+  cv::Mat out(static_cast<int>(rows.size()), m.cols, m.type());
+  for (std::size_t i = 0; i < rows.size(); ++i) m.row(rows[i]).copyTo(out.row(static_cast<int>(i)));
+  return out;
+}
+
+bool has_depth(const Keyframe& kf, int row) {
+  if (kf.points_camera_m.empty()) return false;
+  const Eigen::Vector3d& p = kf.points_camera_m[static_cast<std::size_t>(row)];
+  return p.allFinite() && p.z() > 0;
+}
+
+}  // namespace
+
+LoopCloser::LoopCloser(std::unique_ptr<BowModel> model, const PinholeIntrinsics<double>& camera, int image_width_px,
+                       int image_height_px, const LoopCloserSettings& settings)
+    : model_(std::move(model)), camera_(camera), settings_(settings) {
+  if (!model_) throw std::invalid_argument("LoopCloser: the BoW model is null");
+  settings_.validate();
+  if (image_width_px < 1 || image_height_px < 1)
+    throw std::invalid_argument("LoopCloser: the image size must be positive");
+  if (!(camera.fx_px > 0 && camera.fy_px > 0 && std::isfinite(camera.cx_px) && std::isfinite(camera.cy_px))) {
+    throw std::invalid_argument("LoopCloser: the camera's focal lengths must be positive and its centre finite");
+  }
+  image_.width_px = image_width_px;
+  image_.height_px = image_height_px;
+  similarity_.settings = settings_.similarity;
+  similarity_.graph_builder.settings = settings_.graph;
+  similarity_.degree_entropy.settings = settings_.degree_entropy;
+  similarity_.degree_entropy.scaling.kind = settings_.exponent_scaling;
+}
+
+LoopCloser::LoopCloser(bow::Vocabulary vocabulary, const PinholeIntrinsics<double>& camera, int image_width_px,
+                       int image_height_px, const LoopCloserSettings& settings)
+    : LoopCloser(std::make_unique<VocabularyBowModel>(std::move(vocabulary)), camera, image_width_px, image_height_px,
+                 settings) {}
+
+const LoopCloser::CachedEntropies& LoopCloser::own_entropies(const Keyframe& kf) {
+  CachedEntropies& c = cache_.at(static_cast<std::size_t>(kf.id));
+  if (c.ready) return c;
+  const std::vector<cv::KeyPoint> kp = select_keypoints(kf, static_feature_rows(kf));
+  const Graph<double> g = similarity_.graph_builder.build(image_, kp, kf.dynamic_mask, NoMask{}, kf.instances);
+  c.has_nodes = g.num_nodes() > 0;
+  if (c.has_nodes) c.entropies = similarity_.entropies(g);
+  c.ready = true;
+  return c;
+}
+
+double LoopCloser::cge_score(const Keyframe& current, const Keyframe& other) {
+  if (settings_.graph_stability == GraphStability::own_mask) {
+    const CachedEntropies& a = own_entropies(current);
+    const CachedEntropies& b = own_entropies(other);
+    if (!a.has_nodes || !b.has_nodes) return 0;  // nothing stable to compare: no evidence of a loop
+    return similarity_.combine(a.entropies, b.entropies, compare_semantics(current.instances, other.instances))
+        .similarity;
+  }
+  const std::vector<cv::KeyPoint> kc = select_keypoints(current, static_feature_rows(current));
+  const std::vector<cv::KeyPoint> ko = select_keypoints(other, static_feature_rows(other));
+  const Graph<double> gc =
+      similarity_.graph_builder.build(image_, kc, current.dynamic_mask, other.dynamic_mask, current.instances);
+  const Graph<double> go =
+      similarity_.graph_builder.build(image_, ko, other.dynamic_mask, current.dynamic_mask, other.instances);
+  if (gc.num_nodes() == 0 || go.num_nodes() == 0) return 0;
+  return similarity_
+      .combine(similarity_.entropies(gc), similarity_.entropies(go),
+               compare_semantics(current.instances, other.instances))
+      .similarity;
+}
+
+void LoopCloser::geometric_check(const Keyframe& current, const Keyframe& match, LoopDecision& decision) const {
+  const std::vector<int> query_rows = static_feature_rows(current);
+  std::vector<int> match_rows;
+  for (int r : static_feature_rows(match)) {
+    if (has_depth(match, r)) match_rows.push_back(r);
+  }
+  decision.reason = LoopReason::too_few_matches;
+  if (query_rows.empty() || match_rows.size() < 2) return;
+
+  // Nearest and second-nearest match row for every query row (Hamming), ratio and distance tests,
+  // then one query per match row (the closest; the smaller query index on ties).
+  const cv::Mat qd = select_rows(current.descriptors, query_rows);
+  const cv::Mat md = select_rows(match.descriptors, match_rows);
+  std::vector<std::vector<cv::DMatch>> knn;
+  cv::BFMatcher(cv::NORM_HAMMING).knnMatch(qd, md, knn, 2);
+  std::map<int, cv::DMatch> by_match_row;  // keyed by match row index: deterministic order
+  for (const auto& k : knn) {
+    if (k.empty()) continue;
+    const cv::DMatch& best = k[0];
+    if (best.distance > static_cast<float>(settings_.max_descriptor_distance)) continue;
+    if (k.size() > 1 && !(best.distance < static_cast<float>(settings_.descriptor_ratio) * k[1].distance)) continue;
+    auto it = by_match_row.find(best.trainIdx);
+    if (it == by_match_row.end() || best.distance < it->second.distance ||
+        (best.distance == it->second.distance && best.queryIdx < it->second.queryIdx)) {
+      by_match_row[best.trainIdx] = best;
+    }
+  }
+  decision.tentative_matches = static_cast<int>(by_match_row.size());
+  decision.matched_points = decision.tentative_matches;
+  if (decision.tentative_matches <= settings_.min_matched_points) return;
+
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  std::vector<std::pair<int, int>> pairs;  // (query keypoint, match keypoint)
+  for (const auto& kv : by_match_row) {
+    const int q = query_rows[static_cast<std::size_t>(kv.second.queryIdx)];
+    const int m = match_rows[static_cast<std::size_t>(kv.first)];
+    const Eigen::Vector3d& p = match.points_camera_m[static_cast<std::size_t>(m)];
+    object.emplace_back(p.x(), p.y(), p.z());
+    image.emplace_back(current.keypoints[static_cast<std::size_t>(q)].pt);
+    pairs.emplace_back(q, m);
+  }
+  decision.reason = LoopReason::pose_not_robust;
+  const cv::Matx33d K(camera_.fx_px, 0, camera_.cx_px, 0, camera_.fy_px, camera_.cy_px, 0, 0, 1);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  bool ok = false;
+  try {
+    ok = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, settings_.pnp_iterations,
+                            static_cast<float>(settings_.pnp_reprojection_error_px), settings_.pnp_confidence, inliers,
+                            cv::SOLVEPNP_EPNP);
+  } catch (const cv::Exception&) {
+    ok = false;  // degenerate configuration: no robust pose
+  }
+  decision.matched_points = static_cast<int>(inliers.size());
+  if (!ok || static_cast<int>(inliers.size()) <= settings_.min_matched_points) return;
+  cv::Mat R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Matrix3d R_e;
+  Eigen::Vector3d t_e;
+  cv::cv2eigen(R, R_e);
+  cv::cv2eigen(tvec, t_e);
+  if (!R_e.allFinite() || !t_e.allFinite()) return;
+  Eigen::Isometry3d T_query_match = Eigen::Isometry3d::Identity();  // maps match-camera points to the query camera
+  T_query_match.linear() = R_e;
+  T_query_match.translation() = t_e;
+  decision.T_match_query = T_query_match.inverse();
+  std::sort(inliers.begin(), inliers.end());
+  decision.inlier_pairs.clear();
+  for (int i : inliers) decision.inlier_pairs.push_back(pairs[static_cast<std::size_t>(i)]);
+  decision.reason = LoopReason::accepted;
+  decision.accepted = true;
+}
+
+LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabaseView& map) {
+  if (current.id != processed_) {
+    throw std::invalid_argument("LoopCloser::process: keyframe id " + std::to_string(current.id) + ", expected " +
+                                std::to_string(processed_) + " (one call per keyframe, in id order)");
+  }
+  const int width = static_cast<int>(image_.width_px);
+  const int height = static_cast<int>(image_.height_px);
+  check_keyframe(current, width, height);
+  cache_.resize(static_cast<std::size_t>(processed_) + 1);
+
+  LoopDecision decision;
+  decision.query_keyframe = current.id;
+  const cv::Mat static_descriptors = select_rows(current.descriptors, static_feature_rows(current));
+  const std::vector<BowQueryMatch> bow = model_->query(static_descriptors);
+
+  // Step 1: candidates.
+  std::vector<char> excluded(static_cast<std::size_t>(current.id) + 1, 0);
+  for (int id = std::max(0, current.id - settings_.recent_keyframes_excluded); id <= current.id; ++id) {
+    excluded[static_cast<std::size_t>(id)] = 1;
+  }
+  for (int id : map.covisible_keyframes(current.id, -1)) {
+    if (id >= 0 && id <= current.id) excluded[static_cast<std::size_t>(id)] = 1;
+  }
+  std::vector<double> bow_score(static_cast<std::size_t>(current.id) + 1, 0.0);
+  int best_common = 0;
+  for (const BowQueryMatch& m : bow) {
+    if (m.keyframe_id < 0 || m.keyframe_id >= current.id) continue;
+    bow_score[static_cast<std::size_t>(m.keyframe_id)] = m.score;
+    if (!excluded[static_cast<std::size_t>(m.keyframe_id)]) best_common = std::max(best_common, m.common_words);
+  }
+  std::vector<int> candidates;
+  for (const BowQueryMatch& m : bow) {
+    if (m.keyframe_id < 0 || m.keyframe_id >= current.id || excluded[static_cast<std::size_t>(m.keyframe_id)]) continue;
+    if (m.common_words > 0 && m.common_words >= settings_.min_common_words_ratio * best_common) {
+      candidates.push_back(m.keyframe_id);
+    }
+  }
+  std::sort(candidates.begin(), candidates.end());
+  decision.candidates = static_cast<int>(candidates.size());
+
+  auto finish = [&]() {
+    model_->add(current.id, static_descriptors);
+    ++processed_;
+    return decision;
+  };
+  if (candidates.empty()) {
+    consistent_groups_.clear();
+    decision.reason = LoopReason::no_candidates;
+    return finish();
+  }
+
+  // Steps 2 and 3: groups and their scores.
+  double best_candidate_bow = 0;
+  for (int c : candidates) best_candidate_bow = std::max(best_candidate_bow, bow_score[static_cast<std::size_t>(c)]);
+  std::map<int, double> cge_memo;
+  auto cge_of = [&](int id) {
+    auto it = cge_memo.find(id);
+    if (it != cge_memo.end()) return it->second;
+    const double s = cge_score(current, map.keyframe(id));
+    cge_memo.emplace(id, s);
+    return s;
+  };
+  auto member_score = [&](int id) {
+    const double b = bow_score[static_cast<std::size_t>(id)];
+    switch (settings_.scoring) {
+      case LoopScoring::bow_only:
+        return b;
+      case LoopScoring::combined:
+        return best_candidate_bow > 0 ? cge_of(id) * b / best_candidate_bow : 0.0;
+      case LoopScoring::cge:
+        break;
+    }
+    return cge_of(id);
+  };
+  // The gate of step 3: the BoW score in bow_only mode, S_sum otherwise (also in combined mode,
+  // whose product only ranks).
+  const double threshold =
+      settings_.scoring == LoopScoring::bow_only ? settings_.min_bow_score : settings_.min_cge_score;
+  auto gate_value = [&](int id) {
+    return settings_.scoring == LoopScoring::bow_only ? bow_score[static_cast<std::size_t>(id)] : cge_of(id);
+  };
+
+  struct Scored {
+    Group group;
+    double total = 0;
+    int best = -1;
+    double best_score = -1;
+  };
+  std::vector<Scored> groups;
+  for (int c : candidates) {
+    Scored s;
+    s.group.members.push_back(c);
+    for (int id : map.covisible_keyframes(c, settings_.group_size)) {
+      if (id < 0 || id >= current.id || excluded[static_cast<std::size_t>(id)]) continue;
+      if (std::find(s.group.members.begin(), s.group.members.end(), id) == s.group.members.end()) {
+        s.group.members.push_back(id);
+      }
+    }
+    for (int id : s.group.members) {
+      const double v = member_score(id);
+      s.total += v;
+      if (v > s.best_score || (v == s.best_score && id < s.best)) {
+        s.best_score = v;
+        s.best = id;
+      }
+    }
+    groups.push_back(std::move(s));
+  }
+  std::size_t best_group = 0;
+  for (std::size_t g = 1; g < groups.size(); ++g) {
+    if (groups[g].total > groups[best_group].total) best_group = g;
+  }
+  const Scored& chosen = groups[best_group];
+  decision.match_keyframe = chosen.best;
+  decision.bow_score = bow_score[static_cast<std::size_t>(chosen.best)];
+  decision.cge_score = cge_of(chosen.best);
+
+  // Step 4: continuity over the groups that passed the threshold.
+  std::vector<Group> next;
+  int chosen_consistency = 0;
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    if (!(gate_value(groups[g].best) >= threshold)) continue;
+    Group grp = groups[g].group;
+    int previous = 0;
+    for (const Group& old : consistent_groups_) {
+      for (int id : grp.members) {
+        if (std::find(old.members.begin(), old.members.end(), id) != old.members.end()) {
+          previous = std::max(previous, old.consistency);
+          break;
+        }
+      }
+    }
+    grp.consistency = previous + 1;
+    if (g == best_group) chosen_consistency = grp.consistency;
+    next.push_back(std::move(grp));
+  }
+  consistent_groups_ = std::move(next);
+  if (!(gate_value(chosen.best) >= threshold)) {
+    decision.reason = LoopReason::low_score;
+    return finish();
+  }
+  if (chosen_consistency < settings_.consistent_keyframes) {
+    decision.reason = LoopReason::continuity;
+    return finish();
+  }
+
+  // Step 5: geometry.
+  geometric_check(current, map.keyframe(chosen.best), decision);
+  return finish();
+}
+
+}  // namespace slam
+}  // namespace cge
