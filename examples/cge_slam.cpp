@@ -43,6 +43,7 @@
 #include "cge/dataset/orbslam2_settings.hpp"
 #include "cge/dataset/segmentation_source.hpp"
 #include "cge/dataset/tum_sequence.hpp"
+#include "cge/metrics/ate.hpp"
 #include "cge/segmentation/coco_classes.hpp"
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
@@ -203,6 +204,11 @@ class DatasetSource final : public FrameSource {
  public:
   explicit DatasetSource(const cge::dataset::TumSequence& sequence, int frames)
       : sequence_(sequence), frames_(frames) {}
+  std::vector<std::pair<double, Eigen::Isometry3d>> ground_truth() const override {
+    std::vector<std::pair<double, Eigen::Isometry3d>> gt;
+    for (const auto& p : sequence_.ground_truth()) gt.emplace_back(p.timestamp_s, p.T_world_camera);
+    return gt;
+  }
   int frame_count() const override { return frames_; }
   cge::slam::FrameInput frame(int index) override {
     const cge::dataset::TumFrame f = sequence_.load(index);
@@ -273,7 +279,8 @@ double median(std::vector<double> v) {
   return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-nlohmann::ordered_json make_summary(const cge::slam::System& system, const Options& opt, const std::string& source) {
+nlohmann::ordered_json make_summary(const cge::slam::System& system, const Options& opt, const std::string& source,
+                                    const std::vector<std::pair<double, Eigen::Isometry3d>>& ground_truth) {
   using cge::slam::TrackingState;
   nlohmann::ordered_json j;
   const auto& frames = system.frames();
@@ -305,6 +312,22 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
     }
     stages[cge::slam::to_string(static_cast<cge::slam::Stage>(s))] = {
         {"mean_ms", frames.empty() ? 0.0 : sum / static_cast<double>(frames.size())}, {"median_ms", median(ms)}};
+  }
+  // ATE (cge::metrics, as cge_eval ate) when ground truth exists and a frame was tracked.
+  cge::metrics::Trajectory gt, estimate;
+  for (const auto& p : ground_truth) gt.push_back({p.first, p.second});
+  for (const auto& r : frames) {
+    if (r.has_pose()) estimate.push_back({r.timestamp_s, system.pose_of(r)});
+  }
+  if (!gt.empty() && !estimate.empty()) {
+    try {
+      const cge::metrics::AteResult ate = cge::metrics::compute_ate(gt, estimate);
+      const cge::metrics::ErrorStatistics& t = ate.translation_m;
+      j["ate"] = {{"pairs", t.count}, {"rmse_m", t.rmse}, {"mean_m", t.mean}, {"median_m", t.median},
+                  {"std_m", t.std},   {"min_m", t.min},   {"max_m", t.max}};
+    } catch (const std::invalid_argument& e) {
+      j["ate"] = {{"error", e.what()}};
+    }
   }
   j["stages"] = stages;
   return j;
@@ -420,9 +443,9 @@ int run(Options opt) {
   out.write("loops.csv", [&](std::ostream& f) { cge::slam::write_loops_csv(f, system.loops()); });
   out.write("frames.csv", [&](std::ostream& f) { cge::slam::write_frames_csv(f, system.frames()); });
   out.write("timings.csv", [&](std::ostream& f) { cge::slam::write_timings_csv(f, system.frames()); });
-  const nlohmann::ordered_json summary = make_summary(system, opt, source_name);
-  out.write("summary.json", [&](std::ostream& f) { f << summary.dump(2) << '\n'; });
   const auto gt = source->ground_truth();
+  const nlohmann::ordered_json summary = make_summary(system, opt, source_name, gt);
+  out.write("summary.json", [&](std::ostream& f) { f << summary.dump(2) << '\n'; });
   if (opt.dataset.empty() && !gt.empty()) {
     out.write("groundtruth.txt", [&](std::ostream& f) {
       f << "# ground truth trajectory of the rendered sequence: timestamp tx ty tz qx qy qz qw\n";

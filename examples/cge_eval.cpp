@@ -1,0 +1,290 @@
+// cge_eval: trajectory and loop-closure metrics against ground truth (docs/EVALUATION.md).
+//   cge_eval ate GT EST [--max-difference 0.02] [--offset 0]       absolute trajectory error
+//   cge_eval rpe GT EST [--delta 1] [--delta-unit s|frames]        relative pose error
+//   cge_eval loops GT_LOOPS LOOPS_CSV [--tolerance 0.001]          loop precision and recall
+// GT and EST are TUM trajectories; ATE and RPE follow the TUM RGB-D benchmark tools.
+//
+// Output: one "name value" line per quantity on standard output (15 significant digits; "nan" for
+// an undefined ratio), or with --json one JSON object (null for undefined). Diagnostics go to
+// standard error. Exit codes: 0 success; 1 standard output could not be written; 2 bad usage or
+// bad input (the message names the file and line).
+
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <iostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "cge/metrics/ate.hpp"
+#include "cge/metrics/ground_truth_loops_io.hpp"
+#include "cge/metrics/loop_precision_recall.hpp"
+#include "cge/metrics/loop_queries_io.hpp"
+#include "cge/metrics/rpe.hpp"
+#include "cge/metrics/tum_trajectory_io.hpp"
+
+#ifndef CGE_VERSION_STRING
+#define CGE_VERSION_STRING "unknown"
+#endif
+
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitOutput = 1;
+constexpr int kExitUsage = 2;
+constexpr const char* kProgram = "cge_eval";
+
+namespace m = cge::metrics;
+
+/// A bad flag value or an unusable input, reported on stderr with exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Options {
+  std::string groundtruth;
+  std::string estimate;
+  std::string loops_txt;
+  std::string loops_csv;
+  bool json = false;
+  std::string duplicate_stamps = "error";
+  double max_difference_s = m::AssociationSettings{}.max_difference_s;
+  double offset_s = m::AssociationSettings{}.offset_s;
+  double delta = m::RpeSettings{}.delta;
+  std::string delta_unit = "s";
+  double tolerance_s = m::LoopEvaluationSettings{}.timestamp_tolerance_s;
+};
+
+/// One result: a name and a number (NaN for undefined); counts print as JSON integers.
+struct Value {
+  std::string name;
+  double value;
+  bool count;
+};
+using Values = std::vector<Value>;  // in print order
+
+Value count(const std::string& name, std::size_t n) { return {name, static_cast<double>(n), true}; }
+Value real(const std::string& name, double x) { return {name, x, false}; }
+
+std::string number(double value) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.15g", value);
+  return buf;
+}
+
+m::Trajectory read_trajectory(const std::string& path, const Options& opt) {
+  m::TumReadSettings settings;
+  settings.duplicate_timestamps =
+      opt.duplicate_stamps == "last" ? m::DuplicateTimestamps::keep_last : m::DuplicateTimestamps::refuse;
+  m::TumReadReport report;
+  m::Trajectory t;
+  try {
+    t = m::read_tum_trajectory_file(path, settings, &report);
+  } catch (const m::ParseError& e) {
+    if (e.reason().find("repeats the one") != std::string::npos) {
+      throw UsageError(e.source() + ":" + std::to_string(e.line()) + ": " +
+                       e.reason().substr(0, e.reason().find(" (")) +
+                       " (the TUM tools keep the later line: pass --duplicate-stamps last to do the same)");
+    }
+    throw;
+  }
+  for (const std::size_t line : report.replaced_lines) {
+    std::fprintf(stderr, "%s: note: %s:%zu: pose replaced by the next pose with the same timestamp\n", kProgram,
+                 path.c_str(), line);
+  }
+  if (t.empty()) throw UsageError(path + ": the file contains no poses");
+  return t;
+}
+
+void add_statistics(Values& v, const std::string& prefix, const std::string& unit, const m::ErrorStatistics& s) {
+  v.push_back(real(prefix + "rmse" + unit, s.rmse));
+  v.push_back(real(prefix + "mean" + unit, s.mean));
+  v.push_back(real(prefix + "median" + unit, s.median));
+  v.push_back(real(prefix + "std" + unit, s.std));
+  v.push_back(real(prefix + "min" + unit, s.min));
+  v.push_back(real(prefix + "max" + unit, s.max));
+}
+
+Values run_ate(const Options& opt, nlohmann::ordered_json& inputs) {
+  if (!(std::isfinite(opt.max_difference_s) && opt.max_difference_s > 0)) {
+    throw UsageError("--max-difference must be a finite positive number, got " + number(opt.max_difference_s));
+  }
+  if (!std::isfinite(opt.offset_s)) throw UsageError("--offset must be finite");
+  const m::Trajectory gt = read_trajectory(opt.groundtruth, opt);
+  const m::Trajectory est = read_trajectory(opt.estimate, opt);
+  m::AteSettings settings;
+  settings.association.max_difference_s = opt.max_difference_s;
+  settings.association.offset_s = opt.offset_s;
+  const m::AteResult r = m::compute_ate(gt, est, settings);
+  inputs = {{"groundtruth", opt.groundtruth},
+            {"estimate", opt.estimate},
+            {"max_difference_s", opt.max_difference_s},
+            {"offset_s", opt.offset_s}};
+  Values v = {count("groundtruth_poses", gt.size()), count("estimate_poses", est.size()),
+              count("compared_pose_pairs", r.translation_m.count)};
+  add_statistics(v, "ate_", "_m", r.translation_m);
+  return v;
+}
+
+Values run_rpe(const Options& opt, nlohmann::ordered_json& inputs) {
+  const m::RpeDeltaUnit unit = opt.delta_unit == "frames" ? m::RpeDeltaUnit::frames : m::RpeDeltaUnit::seconds;
+  if (!(std::isfinite(opt.delta) && opt.delta > 0)) {
+    throw UsageError("--delta must be a finite positive number, got " + number(opt.delta));
+  }
+  if (unit == m::RpeDeltaUnit::frames && opt.delta != std::floor(opt.delta)) {
+    throw UsageError("--delta in frames must be a whole number, got " + number(opt.delta));
+  }
+  const m::Trajectory gt = read_trajectory(opt.groundtruth, opt);
+  const m::Trajectory est = read_trajectory(opt.estimate, opt);
+  m::RpeSettings settings;
+  settings.delta = opt.delta;
+  settings.delta_unit = unit;
+  const m::RpeResult r = m::compute_rpe(gt, est, settings);
+  inputs = {{"groundtruth", opt.groundtruth},
+            {"estimate", opt.estimate},
+            {"delta", opt.delta},
+            {"delta_unit", opt.delta_unit}};
+  Values v = {count("groundtruth_poses", gt.size()), count("estimate_poses", est.size()),
+              count("compared_pose_pairs", r.pairs.size())};
+  add_statistics(v, "rpe_trans_", "_m", r.translation_m);
+  add_statistics(v, "rpe_rot_", "_deg", r.rotation_deg);
+  return v;
+}
+
+Values run_loops(const Options& opt, nlohmann::ordered_json& inputs) {
+  if (!(std::isfinite(opt.tolerance_s) && opt.tolerance_s >= 0)) {
+    throw UsageError("--tolerance must be a finite number >= 0, got " + number(opt.tolerance_s));
+  }
+  const std::vector<m::GroundTruthLoop> gt = m::read_ground_truth_loops_file(opt.loops_txt);
+  const std::vector<m::LoopQuery> rows = m::read_loop_queries_file(opt.loops_csv);
+  m::LoopEvaluationSettings settings;
+  settings.timestamp_tolerance_s = opt.tolerance_s;
+  const m::LoopEvaluation e = m::evaluate_loops(gt, rows, settings);
+  if (e.detections == 0) std::fprintf(stderr, "%s: note: no accepted loop: precision is undefined (nan)\n", kProgram);
+  if (e.loop_queries == 0) {
+    std::fprintf(stderr, "%s: note: no queried keyframe has a ground-truth loop: recall is undefined (nan)\n",
+                 kProgram);
+  }
+  inputs = {{"ground_truth_loops", opt.loops_txt}, {"loops_csv", opt.loops_csv}, {"tolerance_s", opt.tolerance_s}};
+  return {count("ground_truth_pairs", e.ground_truth_pairs),
+          count("queried_keyframes", e.queried_keyframes),
+          count("detections", e.detections),
+          count("correct_detections", e.correct_detections),
+          real("precision", e.precision),
+          count("loop_queries", e.loop_queries),
+          count("detected_loop_queries", e.detected_loop_queries),
+          real("query_recall", e.query_recall),
+          count("loop_events", e.loop_events),
+          count("detected_loop_events", e.detected_loop_events),
+          real("event_recall", e.event_recall)};
+}
+
+int print(const std::string& command, const Values& values, const nlohmann::ordered_json& inputs, bool json) {
+  if (json) {
+    nlohmann::ordered_json out;
+    out["tool"] = kProgram;
+    out["version"] = CGE_VERSION_STRING;
+    out["command"] = command;
+    out["inputs"] = inputs;
+    for (const Value& v : values) {
+      if (v.count) {
+        out[v.name] = static_cast<unsigned long long>(v.value);
+      } else if (std::isnan(v.value)) {
+        out[v.name] = nullptr;  // undefined ratio
+      } else {
+        out[v.name] = v.value;
+      }
+    }
+    std::cout << out.dump(2) << '\n';
+  } else {
+    for (const Value& v : values) std::cout << v.name << ' ' << number(v.value) << '\n';
+  }
+  std::cout.flush();
+  if (!std::cout) {
+    std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);
+    return kExitOutput;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  CLI::App app{"Trajectory and loop-closure metrics against ground truth (cge " CGE_VERSION_STRING
+               ").\nATE and RPE as the TUM RGB-D benchmark tools compute them; loop precision and recall "
+               "against\nthe synthetic sequences' loops.txt. See docs/EVALUATION.md.",
+               kProgram};
+  app.set_version_flag("--version", std::string(kProgram) + " " + CGE_VERSION_STRING);
+  app.require_subcommand(1);
+
+  auto add_common = [&opt](CLI::App* sub) {
+    sub->add_flag("--json", opt.json, "print one JSON object instead of \"name value\" lines");
+  };
+  auto add_trajectories = [&opt](CLI::App* sub) {
+    sub->add_option("GT", opt.groundtruth, "ground-truth trajectory (TUM format)")->required();
+    sub->add_option("EST", opt.estimate, "estimated trajectory (TUM format)")->required();
+    sub->add_option("--duplicate-stamps", opt.duplicate_stamps,
+                    "a line repeating the previous timestamp: error, or last (keep the later line, as the TUM tools)")
+        ->check(CLI::IsMember({"error", "last"}))
+        ->capture_default_str();
+  };
+
+  CLI::App* ate = app.add_subcommand("ate", "absolute trajectory error (evaluate_ate.py)");
+  add_trajectories(ate);
+  ate->add_option("--max-difference", opt.max_difference_s, "largest timestamp difference of an associated pair, s")
+      ->capture_default_str();
+  ate->add_option("--offset", opt.offset_s, "time offset added to the estimate's timestamps, s")->capture_default_str();
+  add_common(ate);
+
+  CLI::App* rpe = app.add_subcommand("rpe", "relative pose error over a fixed delta (evaluate_rpe.py --fixed_delta)");
+  add_trajectories(rpe);
+  rpe->add_option("--delta", opt.delta, "separation of the compared poses, in --delta-unit")->capture_default_str();
+  rpe->add_option("--delta-unit", opt.delta_unit, "unit of --delta: s (seconds) or frames")
+      ->check(CLI::IsMember({"s", "frames"}))
+      ->capture_default_str();
+  add_common(rpe);
+
+  CLI::App* loops = app.add_subcommand("loops", "loop-closure precision and recall");
+  loops->add_option("GT_LOOPS", opt.loops_txt, "ground-truth loops (the sequence's loops.txt)")->required();
+  loops->add_option("LOOPS_CSV", opt.loops_csv, "the loop closer's log (cge_slam's loops.csv)")->required();
+  loops->add_option("--tolerance", opt.tolerance_s, "two timestamps within this are the same frame, s")
+      ->capture_default_str();
+  add_common(loops);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version exit 0; every real parse error (unknown flag, bad value) exits 2.
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
+    return kExitUsage;
+  }
+
+  try {
+    nlohmann::ordered_json inputs;
+    if (ate->parsed()) {
+      const Values v = run_ate(opt, inputs);
+      return print("ate", v, inputs, opt.json);
+    }
+    if (rpe->parsed()) {
+      const Values v = run_rpe(opt, inputs);
+      return print("rpe", v, inputs, opt.json);
+    }
+    const Values v = run_loops(opt, inputs);
+    return print("loops", v, inputs, opt.json);
+  } catch (const std::invalid_argument& e) {  // malformed input (file:line) or unusable data
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  }
+}

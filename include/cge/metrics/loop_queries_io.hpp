@@ -1,0 +1,126 @@
+#pragma once
+// Reader of the loop closer's log, loops.csv, written by cge_slam (format fixed in the issue-5
+// brief and docs/EVALUATION.md):
+//   query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,reason
+// The first non-blank line must be exactly that header; then one row per keyframe the loop closer
+// processed, 9 comma-separated fields:
+//   - query_timestamp: finite number; query_keyframe: non-negative whole number;
+//   - match_timestamp, match_keyframe, bow_score, cge_score, matched_points: empty when there was
+//     no candidate, else a finite number / non-negative whole numbers;
+//   - accepted: 0 or 1; reason: one word of lower-case letters and '_' (accepted, no_candidates,
+//     low_score, continuity, too_few_matches, pose_not_robust); accepted is 1 exactly when the
+//     reason is "accepted", and an accepted row has a match.
+// Lines that are blank or start with '#' are skipped. A malformed line throws ParseError.
+
+#include <cmath>
+#include <cstddef>
+#include <istream>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cge/metrics/text_input.hpp"
+
+namespace cge {
+namespace metrics {
+
+/// One row of loops.csv.
+struct LoopQuery {
+  double query_timestamp_s = 0.0;
+  std::optional<double> match_timestamp_s;  ///< empty: no candidate
+  long long query_keyframe = 0;
+  std::optional<long long> match_keyframe;
+  std::optional<double> bow_score;
+  std::optional<double> cge_score;
+  std::optional<long long> matched_points;
+  bool accepted = false;
+  std::string reason;
+  std::size_t line = 0;  ///< line in the file, for messages
+};
+
+inline constexpr const char* kLoopQueriesHeader =
+    "query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,"
+    "reason";
+
+inline std::vector<LoopQuery> read_loop_queries(std::istream& in, const std::string& source) {
+  std::vector<LoopQuery> rows;
+  detail::LineReader reader(in, source);
+  std::string line;
+  bool header_seen = false;
+  auto optional_number = [&reader](std::string_view field, const char* name) -> std::optional<double> {
+    if (field.empty()) return std::nullopt;
+    double v = 0.0;
+    if (!detail::parse_double(field, v) || !std::isfinite(v)) {
+      reader.fail(std::string(name) + " " + detail::quoted(field) + " is not a finite number");
+    }
+    return v;
+  };
+  auto optional_count = [&reader](std::string_view field, const char* name) -> std::optional<long long> {
+    if (field.empty()) return std::nullopt;
+    long long v = 0;
+    if (!detail::parse_count(field, v)) {
+      reader.fail(std::string(name) + " " + detail::quoted(field) + " is not a non-negative whole number");
+    }
+    return v;
+  };
+  while (reader.next(line)) {
+    if (detail::is_blank_or_comment(line)) continue;
+    const std::vector<std::string_view> f = detail::split_csv(line);
+    if (!header_seen) {
+      std::string joined;
+      for (std::size_t i = 0; i < f.size(); ++i) joined += (i ? "," : "") + std::string(f[i]);
+      if (joined != kLoopQueriesHeader) {
+        reader.fail("expected the header '" + std::string(kLoopQueriesHeader) + "'");
+      }
+      header_seen = true;
+      continue;
+    }
+    if (f.size() != 9) reader.fail("expected 9 comma-separated fields, found " + std::to_string(f.size()));
+    LoopQuery row;
+    row.line = reader.line_number();
+    const std::optional<double> query = optional_number(f[0], "query_timestamp");
+    if (!query) reader.fail("query_timestamp is empty");
+    row.query_timestamp_s = *query;
+    row.match_timestamp_s = optional_number(f[1], "match_timestamp");
+    const std::optional<long long> query_keyframe = optional_count(f[2], "query_keyframe");
+    if (!query_keyframe) reader.fail("query_keyframe is empty");
+    row.query_keyframe = *query_keyframe;
+    row.match_keyframe = optional_count(f[3], "match_keyframe");
+    row.bow_score = optional_number(f[4], "bow_score");
+    row.cge_score = optional_number(f[5], "cge_score");
+    row.matched_points = optional_count(f[6], "matched_points");
+    if (f[7] != "0" && f[7] != "1") reader.fail("accepted " + detail::quoted(f[7]) + " is not 0 or 1");
+    row.accepted = f[7] == "1";
+    if (f[8].empty()) reader.fail("reason is empty");
+    for (const char c : f[8]) {
+      if (!((c >= 'a' && c <= 'z') || c == '_')) {
+        reader.fail("reason " + detail::quoted(f[8]) + " is not one word of lower-case letters and '_'");
+      }
+    }
+    row.reason = std::string(f[8]);
+    if (row.accepted != (row.reason == "accepted")) {
+      reader.fail("accepted is " + std::string(f[7]) + " but the reason is '" + row.reason + "'");
+    }
+    if (row.accepted && !(row.match_timestamp_s && row.match_keyframe)) {
+      reader.fail("an accepted row needs match_timestamp and match_keyframe");
+    }
+    if (row.match_timestamp_s.has_value() != row.match_keyframe.has_value()) {
+      reader.fail("match_timestamp and match_keyframe must be both given or both empty");
+    }
+    rows.push_back(row);
+  }
+  if (!header_seen) {
+    throw ParseError(source, reader.line_number() == 0 ? 1 : reader.line_number(),
+                     "no header line (the file is empty)");
+  }
+  return rows;
+}
+
+inline std::vector<LoopQuery> read_loop_queries_file(const std::string& path) {
+  std::ifstream file = detail::open_input_file(path);
+  return read_loop_queries(file, path);
+}
+
+}  // namespace metrics
+}  // namespace cge

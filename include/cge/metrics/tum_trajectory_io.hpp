@@ -1,0 +1,194 @@
+#pragma once
+// TUM RGB-D trajectory text: one pose per line, "timestamp tx ty tz qx qy qz qw" (seconds, metres,
+// unit quaternion with the scalar last), the pose being T_world_camera.
+//
+// Reading (docs/EVALUATION.md):
+//   - fields are separated by any run of blanks, tabs or commas (as the TUM tools accept);
+//   - blank lines and lines whose first non-blank character is '#' are skipped;
+//   - every other line has exactly 8 numbers, all finite; the quaternion's norm must lie within
+//     TumReadSettings::max_quaternion_norm_error of 1 and is then normalised (TUM ground truth
+//     has 4 decimals, so its quaternions are off by about 1e-4);
+//   - timestamps strictly increase. A repeated timestamp is refused by default; with
+//     DuplicateTimestamps::keep_last the later line replaces the earlier one, which is what the
+//     TUM tools do (they key poses by timestamp in a dict). The official fr2_desk ground truth has
+//     one such repeat (line 10863). A decreasing timestamp is always refused;
+//   - any violation throws ParseError (a std::invalid_argument), "<source>:<line>: <reason>".
+//   An input without poses gives an empty trajectory; whether that is acceptable is the caller's call.
+// Writing: an optional '#' header line, then the timestamp with 6 decimals and the other values
+// with 9 significant digits, the quaternion signed so that qw >= 0 (one spelling per rotation).
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+#include <istream>
+#include <ostream>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "cge/metrics/text_input.hpp"
+#include "cge/metrics/trajectory.hpp"
+
+namespace cge {
+namespace metrics {
+
+/// What the reader does with a line whose timestamp equals the previous line's.
+enum class DuplicateTimestamps {
+  refuse,     ///< throw ParseError (the default: a repeated stamp usually means a broken writer)
+  keep_last,  ///< the later line replaces the earlier pose (the TUM tools' behaviour)
+};
+
+/// Optional report of a read: lines whose pose was replaced by a later line with the same stamp.
+struct TumReadReport {
+  std::vector<std::size_t> replaced_lines;
+};
+
+struct TumReadSettings {
+  /// Largest accepted | |q| - 1 | before normalising, dimensionless; beyond it a line is refused
+  /// as a corrupt quaternion rather than silently rescaled.
+  double max_quaternion_norm_error = 1e-2;
+  DuplicateTimestamps duplicate_timestamps = DuplicateTimestamps::refuse;  ///< see above
+};
+
+/// Reads a TUM trajectory from a stream; `source` names it in error messages.
+inline Trajectory read_tum_trajectory(std::istream& in, const std::string& source, const TumReadSettings& settings = {},
+                                      TumReadReport* report = nullptr) {
+  if (!(settings.max_quaternion_norm_error >= 0 && std::isfinite(settings.max_quaternion_norm_error))) {
+    throw std::invalid_argument("TumReadSettings::max_quaternion_norm_error must be finite and >= 0");
+  }
+  constexpr std::size_t kFields = 8;
+  constexpr std::array<const char*, kFields> kNames = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+  Trajectory trajectory;
+  detail::LineReader reader(in, source);
+  std::string line;
+  std::size_t previous_line = 0;
+  while (reader.next(line)) {
+    if (detail::is_blank_or_comment(line)) continue;
+    const std::vector<std::string_view> fields = detail::split_blank_or_comma(line);
+    if (fields.size() != kFields) {
+      reader.fail("expected 8 fields (timestamp tx ty tz qx qy qz qw), found " + std::to_string(fields.size()));
+    }
+    std::array<double, kFields> v{};
+    for (std::size_t i = 0; i < kFields; ++i) {
+      if (!detail::parse_double(fields[i], v[i])) {
+        reader.fail(std::string(kNames[i]) + " " + detail::quoted(fields[i]) + " is not a number");
+      }
+      if (!std::isfinite(v[i]))
+        reader.fail(std::string(kNames[i]) + " " + detail::quoted(fields[i]) + " is not finite");
+    }
+    Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // w, x, y, z
+    const double norm = q.norm();
+    if (!(std::abs(norm - 1.0) <= settings.max_quaternion_norm_error)) {
+      reader.fail("quaternion norm " + std::to_string(norm) + " is not close to 1 (tolerance " +
+                  std::to_string(settings.max_quaternion_norm_error) + ")");
+    }
+    q.coeffs() /= norm;
+    StampedPose pose;
+    pose.timestamp_s = v[0];
+    pose.T_world_camera.linear() = q.toRotationMatrix();
+    pose.T_world_camera.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+    if (!trajectory.empty() && v[0] == trajectory.back().timestamp_s &&
+        settings.duplicate_timestamps == DuplicateTimestamps::keep_last) {
+      if (report != nullptr) report->replaced_lines.push_back(previous_line);
+      trajectory.back() = pose;
+      previous_line = reader.line_number();
+      continue;
+    }
+    if (!trajectory.empty() && v[0] == trajectory.back().timestamp_s) {
+      reader.fail("timestamp " + std::string(fields[0]) + " repeats the one on line " + std::to_string(previous_line) +
+                  " (the TUM tools keep the later line; allow that with DuplicateTimestamps::keep_last)");
+    }
+    if (!trajectory.empty() && !(v[0] > trajectory.back().timestamp_s)) {
+      reader.fail("timestamp " + std::string(fields[0]) + " does not come after the one on line " +
+                  std::to_string(previous_line) + " (timestamps must increase)");
+    }
+    trajectory.push_back(pose);
+    previous_line = reader.line_number();
+  }
+  return trajectory;
+}
+
+/// Reads a TUM trajectory file; errors name the file (and line).
+inline Trajectory read_tum_trajectory_file(const std::string& path, const TumReadSettings& settings = {},
+                                           TumReadReport* report = nullptr) {
+  std::ifstream file = detail::open_input_file(path);
+  return read_tum_trajectory(file, path, settings, report);
+}
+
+namespace detail {
+
+inline std::string format_number(double value, std::chars_format format, int precision) {
+  char buf[64];
+  const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, value, format, precision);
+  if (r.ec != std::errc()) throw std::invalid_argument("cannot format number");
+  std::string s(buf, r.ptr);
+  // No "-0" or "-0.000000": one spelling of zero.
+  if (!s.empty() && s.front() == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+  return s;
+}
+
+}  // namespace detail
+
+/// One trajectory line without the newline: timestamp with 6 decimals, the rest with 9 significant
+/// digits, quaternion with qw >= 0 (when qw == 0, the first non-zero of qx, qy, qz positive).
+inline std::string format_tum_pose(const StampedPose& pose) {
+  constexpr int kTimestampDecimals = 6;
+  constexpr int kValueDigits = 9;
+  Eigen::Quaterniond q(pose.T_world_camera.linear());
+  q.normalize();
+  Eigen::Vector4d c = q.coeffs();  // x, y, z, w
+  bool flip = c.w() < 0;
+  if (c.w() == 0) {
+    for (int i = 0; i < 3; ++i) {
+      if (c[i] != 0) {
+        flip = c[i] < 0;
+        break;
+      }
+    }
+  }
+  if (flip) c = -c;
+  const Eigen::Vector3d t = pose.T_world_camera.translation();
+  std::string line = detail::format_number(pose.timestamp_s, std::chars_format::fixed, kTimestampDecimals);
+  for (const double value : {t.x(), t.y(), t.z(), c.x(), c.y(), c.z(), c.w()}) {
+    line += ' ';
+    line += detail::format_number(value, std::chars_format::general, kValueDigits);
+  }
+  return line;
+}
+
+/// Writes a trajectory, preceded by "# <header>" when the header is not empty. Throws
+/// std::invalid_argument for a non-finite pose or timestamps that do not increase in their
+/// 6-decimal form (the file would not read back).
+inline void write_tum_trajectory(std::ostream& out, const Trajectory& trajectory,
+                                 const std::string& header = "timestamp tx ty tz qx qy qz qw") {
+  require_valid_trajectory(trajectory, "write_tum_trajectory");
+  std::string text;
+  if (!header.empty()) text += "# " + header + "\n";
+  std::string previous_stamp;
+  double previous_value = 0.0;
+  for (std::size_t i = 0; i < trajectory.size(); ++i) {
+    const std::string line = format_tum_pose(trajectory[i]);
+    const std::string stamp = line.substr(0, line.find(' '));
+    double value = 0.0;
+    detail::parse_double(stamp, value);
+    if (i > 0 && !(value > previous_value)) {
+      throw std::invalid_argument("write_tum_trajectory: timestamps " + previous_stamp + " and " + stamp + " (poses " +
+                                  std::to_string(i - 1) + ", " + std::to_string(i) +
+                                  ") do not increase with 6 decimals");
+    }
+    previous_stamp = stamp;
+    previous_value = value;
+    text += line;
+    text += '\n';
+  }
+  out << text;
+  if (!out) throw std::runtime_error("write_tum_trajectory: the stream refused the text");
+}
+
+}  // namespace metrics
+}  // namespace cge

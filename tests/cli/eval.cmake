@@ -1,0 +1,110 @@
+# Command-line tests of cge_eval (included by CMakeLists.txt when the tool is built). The fixtures
+# under eval/ are hand-made; the expected values are worked out in docs/EVALUATION.md and
+# tests/test_metrics_*.cpp (same constructions), not taken from the tool.
+
+# ATE, six points on the axes, each +-p pair displaced by the same d_k (d1 + d2 + d3 = 0): the
+# alignment cannot reduce the errors |d_k| = 0.03, 0.04, sqrt(0.0017). The estimate's first pose
+# (0.5 s) has no ground truth; the others are 0.01 s late (within --max-difference 0.02).
+set(ev_ate_values
+  "compared_pose_pairs 6" "ate_rmse_m 0\\.03741657386773[0-9]*" "ate_mean_m 0\\.03707701875205[0-9]*"
+  "ate_median_m 0\\.0(4|399999999999[0-9]*)" "ate_std_m 0\\.0050293817174[0-9]*" "ate_min_m 0\\.0(3|29999999999[0-9]*)"
+  "ate_max_m 0\\.04123105625617[0-9]*")
+cge_cli_test(eval_ate PROGRAM cge_eval ARGS ate eval/gt.txt eval/est.txt
+  STDOUT "groundtruth_poses 6" "estimate_poses 7" ${ev_ate_values})
+# The same estimate in another world frame (rotated and shifted, comma-separated): same errors.
+cge_cli_test(eval_ate_rotated PROGRAM cge_eval ARGS ate eval/gt.txt eval/est_rotated.txt STDOUT ${ev_ate_values})
+# A maximum difference below the 0.01 s lag associates nothing.
+cge_cli_test(eval_ate_max_difference PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt eval/est.txt --max-difference 0.005
+  STDERR "ATE: no timestamp")
+cge_cli_test(eval_ate_offset PROGRAM cge_eval ARGS ate eval/gt.txt eval/est.txt --max-difference 0.005 --offset -0.01
+  STDOUT "compared_pose_pairs 6" "ate_rmse_m 0\\.03741657386773[0-9]*")
+cge_cli_test(eval_ate_json PROGRAM cge_eval ARGS ate eval/gt.txt eval/est.txt --json
+  STDOUT [[ *"tool": "cge_eval",]] [[ *"command": "ate",]] [[ *"groundtruth": "eval/gt.txt",]]
+         [[ *"compared_pose_pairs": 6,]] [[ *"ate_rmse_m": 0\.03741657386773[0-9]*,]] [[ *"ate_max_m": 0\.0412310562561[0-9]*]])
+cge_cli_test(eval_ate_no_overlap PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt eval/far.txt STDERR "ATE: no timestamp")
+
+# RPE: the estimate moves at 1.1 m/s where the ground truth moves at 1 m/s (10 Hz, 101 poses):
+# 0.1 m error per second; pairs i = 0 .. 89 (the tool drops pairs ending on the last pose).
+cge_cli_test(eval_rpe PROGRAM cge_eval ARGS rpe eval/rpe_gt.txt eval/rpe_est.txt
+  STDOUT "compared_pose_pairs 90" "rpe_trans_rmse_m 0\\.(1|0999999999[0-9]*|1000000000[0-9]*)"
+         "rpe_trans_max_m 0\\.(1|0999999999[0-9]*|1000000000[0-9]*)" "rpe_rot_rmse_deg 0" "rpe_rot_mean_deg 0")
+cge_cli_test(eval_rpe_frames PROGRAM cge_eval ARGS rpe eval/rpe_gt.txt eval/rpe_est.txt --delta 10 --delta-unit frames
+  STDOUT "compared_pose_pairs 90" "rpe_trans_mean_m 0\\.(1|0999999999[0-9]*|1000000000[0-9]*)")
+cge_cli_test(eval_rpe_one_frame PROGRAM cge_eval ARGS rpe eval/rpe_gt.txt eval/rpe_est.txt --delta 1 --delta-unit frames
+  STDOUT "compared_pose_pairs 99" "rpe_trans_mean_m 0\\.(01|0099999999[0-9]*|0100000000[0-9]*)")
+cge_cli_test(eval_rpe_json PROGRAM cge_eval ARGS rpe eval/rpe_gt.txt eval/rpe_est.txt --json
+  STDOUT [[ *"command": "rpe",]] [[ *"delta_unit": "s"]] [[ *"compared_pose_pairs": 90,]] [[ *"rpe_rot_max_deg": 0\.0]])
+cge_cli_test(eval_rpe_bad_delta PROGRAM cge_eval EXIT 2 ARGS rpe eval/rpe_gt.txt eval/rpe_est.txt --delta 0
+  STDERR "--delta must be a finite positive number")
+cge_cli_test(eval_rpe_fractional_frames PROGRAM cge_eval EXIT 2
+  ARGS rpe eval/rpe_gt.txt eval/rpe_est.txt --delta 1.5 --delta-unit frames STDERR "whole number")
+cge_cli_test(eval_rpe_bad_unit PROGRAM cge_eval EXIT 2 ARGS rpe eval/rpe_gt.txt eval/rpe_est.txt --delta-unit m
+  STDERR "--delta-unit")
+cge_cli_test(eval_rpe_too_short PROGRAM cge_eval EXIT 2 ARGS rpe eval/rpe_gt.txt eval/rpe_est.txt --delta 20
+  STDERR "fewer than two pose pairs")
+
+# Loops, the hand-worked log of tests/test_metrics_loops.cpp: 3 detections, 1 correct; loop
+# keyframes 10, 11, 12, 17, 18 (1 recognised) in two events ({10, 11, 12}, {17, 18}).
+cge_cli_test(eval_loops PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops.csv
+  STDOUT "ground_truth_pairs 7" "queried_keyframes 8" "detections 3" "correct_detections 1"
+         "precision 0\\.333333333333333" "loop_queries 5" "detected_loop_queries 1" "query_recall 0\\.2"
+         "loop_events 2" "detected_loop_events 1" "event_recall 0\\.5")
+cge_cli_test(eval_loops_nan PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops_none_accepted.csv
+  STDOUT "detections 0" "precision nan" "query_recall 0" STDERR "precision is undefined")
+cge_cli_test(eval_loops_json_null PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops_none_accepted.csv --json
+  STDOUT [[ *"precision": null,]] [[ *"event_recall": 0\.0]])
+cge_cli_test(eval_loops_tolerance PROGRAM cge_eval EXIT 2 ARGS loops eval/loops.txt eval/loops.csv --tolerance -1
+  STDERR "--tolerance")
+
+# Malformed input: the file and line, exit code 2, nothing on stdout.
+cge_cli_test(eval_bad_fields PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt eval/bad_fields.txt
+  STDERR "eval/bad_fields\\.txt:3: expected 8 fields \\(timestamp tx ty tz qx qy qz qw\\), found 7")
+cge_cli_test(eval_bad_number PROGRAM cge_eval EXIT 2 ARGS ate eval/bad_number.txt eval/gt.txt
+  STDERR "eval/bad_number\\.txt:3: tz '0\\.5O' is not a number")
+cge_cli_test(eval_bad_commas PROGRAM cge_eval EXIT 2 ARGS rpe eval/gt.txt eval/bad_commas.txt
+  STDERR "eval/bad_commas\\.txt:2: expected 8 fields.*found 9")
+cge_cli_test(eval_bad_quaternion PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt eval/bad_quaternion.txt
+  STDERR "eval/bad_quaternion\\.txt:2: quaternion norm 1\\.249[0-9]* is not close to 1")
+cge_cli_test(eval_bad_order PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt eval/bad_order.txt
+  STDERR "eval/bad_order\\.txt:3: timestamp 2\\.0 does not come after the one on line 2")
+cge_cli_test(eval_duplicate PROGRAM cge_eval EXIT 2 ARGS ate eval/duplicate.txt eval/est.txt
+  STDERR "eval/duplicate\\.txt:3: timestamp 2\\.0000 repeats the one on line 2" "--duplicate-stamps last")
+cge_cli_test(eval_duplicate_last PROGRAM cge_eval ARGS ate eval/duplicate.txt eval/est.txt --duplicate-stamps last
+  STDOUT "groundtruth_poses 6" "compared_pose_pairs 6" STDERR "duplicate\\.txt:2: pose replaced")
+cge_cli_test(eval_empty PROGRAM cge_eval EXIT 2 ARGS ate empty.txt eval/est.txt STDERR "empty\\.txt: the file contains no poses")
+cge_cli_test(eval_missing PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt eval/no_such_file.txt
+  STDERR "cannot open 'eval/no_such_file\\.txt'")
+cge_cli_test(eval_folder PROGRAM cge_eval EXIT 2 ARGS ate eval eval/gt.txt STDERR "'eval': it is a directory")
+cge_cli_test(eval_bad_loops_txt PROGRAM cge_eval EXIT 2 ARGS loops eval/bad_loops.txt eval/loops.csv
+  STDERR "eval/bad_loops\\.txt:3: match_index 11 is not smaller than query_index 1")
+cge_cli_test(eval_bad_loops_csv PROGRAM cge_eval EXIT 2 ARGS loops eval/loops.txt eval/bad_loops.csv
+  STDERR "eval/bad_loops\\.csv:3: accepted 'yes' is not 0 or 1")
+cge_cli_test(eval_bad_header PROGRAM cge_eval EXIT 2 ARGS loops eval/loops.txt eval/bad_header.csv
+  STDERR "eval/bad_header\\.csv:1: expected the header")
+cge_cli_test(eval_loops_csv_as_trajectory PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt eval/loops.csv
+  STDERR "eval/loops\\.csv:1: expected 8 fields")
+
+# Usage.
+cge_cli_test(eval_no_command PROGRAM cge_eval EXIT 2 STDERR "subcommand")
+cge_cli_test(eval_missing_est PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt STDERR "EST")
+cge_cli_test(eval_bad_max_difference PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt eval/est.txt --max-difference -1
+  STDERR "--max-difference must be a finite positive number")
+cge_cli_test(eval_help PROGRAM cge_eval ARGS --help STDOUT ".*ate.*" ".*rpe.*" ".*loops.*")
+cge_cli_test(eval_rpe_help PROGRAM cge_eval ARGS rpe --help STDOUT ".*--delta-unit.*" ".*--duplicate-stamps.*")
+string(REPLACE "." "\\." ev_version_regex "${PROJECT_VERSION}")
+cge_cli_test(eval_version PROGRAM cge_eval ARGS --version STDOUT "cge_eval ${ev_version_regex}")
+
+# The real TUM files, when the shared data is there. The figures themselves are checked against
+# independent oracles in tests/test_metrics_trajectory.cpp; here only that the tool reads the files
+# and prints plausible values (RGB-D SLAM on fr1_xyz is good to 1 .. 5 cm, 786 of 788 poses pair).
+set(ev_tum "${PROJECT_SOURCE_DIR}/../shared/data/tum_trajectories")
+if(EXISTS "${ev_tum}/freiburg1_xyz-rgbdslam.txt" AND EXISTS "${ev_tum}/freiburg1_xyz-groundtruth.txt")
+  cge_cli_test(eval_tum_fr1_xyz_ate PROGRAM cge_eval
+    ARGS ate ${ev_tum}/freiburg1_xyz-groundtruth.txt ${ev_tum}/freiburg1_xyz-rgbdslam.txt
+    STDOUT "estimate_poses 788" "compared_pose_pairs 78[0-8]" "ate_rmse_m 0\\.0[1-4][0-9]*")
+  cge_cli_test(eval_tum_fr1_xyz_rpe PROGRAM cge_eval
+    ARGS rpe ${ev_tum}/freiburg1_xyz-groundtruth.txt ${ev_tum}/freiburg1_xyz-rgbdslam.txt
+    STDOUT "compared_pose_pairs 7[0-9][0-9]" "rpe_trans_rmse_m 0\\.0[0-9]+" "rpe_rot_rmse_deg [0-2]\\.[0-9]+")
+else()
+  message(STATUS "cge: ${ev_tum} is absent, the cge_eval tests on real TUM files are skipped")
+endif()
