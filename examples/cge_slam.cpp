@@ -1,0 +1,523 @@
+// cge_slam: the reference pipeline on an RGB-D sequence (TUM layout) or, without --dataset, on the
+// walking_xyz synthetic preset rendered in memory. Writes into --out:
+//   trajectory.txt  every tracked frame, TUM format (T_world_camera)
+//   keyframes.txt   the keyframes, TUM format
+//   loops.csv       the loop closer's decisions (with --vocabulary; header only without it)
+//   frames.csv      per frame: tracking state, features, dynamic labels, matches, keyframe
+//   timings.csv     per frame and stage, milliseconds
+//   summary.json    counts, the run's settings and mean/median time per stage
+//   groundtruth.txt (without --dataset) the rendered poses, for cge_eval
+// trajectory.txt, keyframes.txt, loops.csv, frames.csv and groundtruth.txt are deterministic (same
+// inputs and seed: same bytes); timings.csv and the `stages` object of summary.json are
+// measurements and differ from run to run.
+//
+// Output folder: refused when not empty unless --force; with --force only the files above are
+// replaced, nothing else is touched. Files are written into a hidden folder inside --out and
+// renamed into place only when the run succeeded, so a failed run leaves --out as it was.
+// Standard error: diagnostics and, on a terminal only, a progress bar.
+// Exit codes: 0 success; 1 failure while running (a file that cannot be written); 2 bad usage or
+// bad input (missing dataset, malformed list file, unreadable image, sizes that differ, ...).
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "cge/dataset/orbslam2_settings.hpp"
+#include "cge/dataset/segmentation_source.hpp"
+#include "cge/dataset/tum_sequence.hpp"
+#include "cge/metrics/ate.hpp"
+#include "cge/segmentation/coco_classes.hpp"
+#include "cge/sim/presets.hpp"
+#include "cge/sim/renderer.hpp"
+#include "cge/sim/segmentation_error_model.hpp"
+#include "cge/slam/label_instances.hpp"
+#include "cge/slam/loop_closer.hpp"
+#include "cge/slam/output_files.hpp"
+#include "cge/slam/system.hpp"
+
+#ifndef CGE_VERSION_STRING
+#define CGE_VERSION_STRING "unknown"
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;
+constexpr int kExitUsage = 2;
+constexpr const char* kProgram = "cge_slam";
+constexpr int kProgressBarWidth = 40;
+constexpr const char* kDefaultPreset = "walking_xyz";
+constexpr int kDefaultPresetFrames = 300;  // 10 s at 30 fps when --frames is not given
+
+bool progress_line_open = false;
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Options {
+  std::string dataset;
+  std::string mode = "YMK";
+  std::string segmentation;  // default: ground_truth (rendered or synthetic folder)
+  std::string model;
+  std::string masks;
+  std::string settings;
+  std::string vocabulary;
+  std::uint64_t seed = 0;
+  int frames = 0;  // 0: all (dataset) or kDefaultPresetFrames (rendered)
+  int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
+  std::string out;
+  bool force = false;
+};
+
+// ---- settings ------------------------------------------------------------------------------------
+
+/// Camera, depth scale and ORB extractor from an ORB-SLAM2 TUM YAML file.
+void apply_settings_file(const fs::path& file, cge::PinholeIntrinsics<double>& intrinsics,
+                         cge::slam::SystemSettings& settings) {
+  const cge::dataset::OrbSlam2Settings s = cge::dataset::read_orbslam2_settings(file);
+  intrinsics = s.camera;
+  settings.frame.depth_units_per_metre = s.depth_map_factor;
+  settings.frame.orb.features = s.orb.features;
+  settings.frame.orb.scale_factor = s.orb.scale_factor;
+  settings.frame.orb.levels = s.orb.levels;
+  settings.frame.orb.initial_fast_threshold = s.orb.initial_fast_threshold;
+  settings.frame.orb.min_fast_threshold = s.orb.min_fast_threshold;
+  if (!s.distortion.is_zero()) {
+    std::fprintf(stderr,
+                 "%s: warning: %s has lens distortion, which the tracker ignores (keypoints are not undistorted)\n",
+                 kProgram, file.string().c_str());
+  }
+}
+
+// ---- the output folder ---------------------------------------------------------------------------
+
+/// Writes files into a hidden staging folder inside `out` and moves them into `out` on commit();
+/// without commit() (a failure) the staging folder is removed and `out` is as it was.
+class OutputFolder {
+ public:
+  OutputFolder(const fs::path& out, bool force) : out_(out) {
+    std::error_code ec;
+    if (fs::exists(out_, ec)) {
+      if (!fs::is_directory(out_, ec)) throw UsageError("'" + out_.string() + "' exists and is not a folder");
+      if (!fs::is_empty(out_, ec) && !force) {
+        throw UsageError("'" + out_.string() +
+                         "' exists and is not empty (use --force to replace cge_slam's files in it)");
+      }
+    } else {
+      fs::create_directories(out_, ec);
+      if (ec) throw std::runtime_error("cannot create '" + out_.string() + "': " + ec.message());
+      created_out_ = true;
+    }
+    staging_ = out_ / (".cge_slam.partial." + std::to_string(::getpid()));
+    fs::create_directory(staging_, ec);
+    if (ec) throw std::runtime_error("cannot create '" + staging_.string() + "': " + ec.message());
+  }
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+  ~OutputFolder() {
+    if (committed_) return;
+    std::error_code ec;
+    fs::remove_all(staging_, ec);  // our own folder, holding only our files
+    if (created_out_ && fs::is_empty(out_, ec)) fs::remove(out_, ec);
+  }
+
+  template <typename Writer>
+  void write(const std::string& name, Writer&& writer) {
+    const fs::path path = staging_ / name;
+    std::ofstream file(path, std::ios::binary);
+    if (!file) throw std::runtime_error("cannot write " + path.string());
+    writer(file);
+    file.flush();
+    if (!file) throw std::runtime_error("cannot write " + path.string());
+    names_.push_back(name);
+  }
+
+  void commit() {
+    for (const std::string& name : names_) {
+      std::error_code ec;
+      fs::rename(staging_ / name, out_ / name, ec);
+      if (ec) throw std::runtime_error("cannot move " + name + " into '" + out_.string() + "': " + ec.message());
+    }
+    std::error_code ec;
+    fs::remove(staging_, ec);
+    committed_ = true;
+  }
+
+ private:
+  fs::path out_, staging_;
+  std::vector<std::string> names_;
+  bool created_out_ = false;
+  bool committed_ = false;
+};
+
+// ---- progress --------------------------------------------------------------------------------------
+
+void draw_progress(int done, int total, double elapsed_s) {
+  const int filled = static_cast<int>(static_cast<long long>(kProgressBarWidth) * done / std::max(total, 1));
+  std::string bar(static_cast<std::size_t>(kProgressBarWidth), ' ');
+  std::fill(bar.begin(), bar.begin() + filled, '=');
+  if (filled < kProgressBarWidth) bar[static_cast<std::size_t>(filled)] = '>';
+  std::fprintf(stderr, "\r%s: [%s] %d/%d frames  %.1f s", kProgram, bar.c_str(), done, total, elapsed_s);
+  progress_line_open = done < total;
+  if (!progress_line_open) std::fputc('\n', stderr);
+  std::fflush(stderr);
+}
+
+// ---- frame sources -------------------------------------------------------------------------------
+
+/// The frames the run processes: read from a dataset folder or rendered in memory.
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  virtual int frame_count() const = 0;
+  virtual cge::slam::FrameInput frame(int index) = 0;
+  /// The instances of the frame when the source segments itself (rendered ground truth); the
+  /// System's segmenter is used otherwise.
+  virtual bool provides_instances() const { return false; }
+  virtual std::vector<cge::SegmentedInstance> instances(int /*index*/) { return {}; }
+  /// Ground-truth poses (timestamp, T_world_camera), when known.
+  virtual std::vector<std::pair<double, Eigen::Isometry3d>> ground_truth() const { return {}; }
+};
+
+class DatasetSource final : public FrameSource {
+ public:
+  explicit DatasetSource(const cge::dataset::TumSequence& sequence, int frames)
+      : sequence_(sequence), frames_(frames) {}
+  std::vector<std::pair<double, Eigen::Isometry3d>> ground_truth() const override {
+    std::vector<std::pair<double, Eigen::Isometry3d>> gt;
+    for (const auto& p : sequence_.ground_truth()) gt.emplace_back(p.timestamp_s, p.T_world_camera);
+    return gt;
+  }
+  int frame_count() const override { return frames_; }
+  cge::slam::FrameInput frame(int index) override {
+    const cge::dataset::TumFrame f = sequence_.load(index);
+    cge::slam::FrameInput in;
+    in.index = index;
+    in.timestamp_s = f.rgb_timestamp_s;
+    in.bgr = f.bgr;
+    in.depth = f.depth;
+    in.stem = f.rgb_stem;
+    return in;
+  }
+
+ private:
+  const cge::dataset::TumSequence& sequence_;
+  int frames_;
+};
+
+class RenderedSource final : public FrameSource {
+ public:
+  RenderedSource(const std::string& preset, int frames, std::uint64_t seed, bool segment)
+      : renderer_(cge::sim::make_preset(preset, frames, seed)), model_(renderer_.instances(), seed), segment_(segment) {
+    for (const cge::sim::InstanceInfo& i : renderer_.instances()) class_of_id_[i.id] = i.class_id;
+  }
+  int frame_count() const override { return renderer_.frame_count(); }
+  const cge::sim::PinholeCamera& camera() const { return renderer_.camera(); }
+  cge::slam::FrameInput frame(int index) override {
+    last_ = renderer_.render(index);
+    cge::slam::FrameInput in;
+    in.index = index;
+    in.timestamp_s = last_.timestamp_s;
+    in.bgr = last_.rgb;
+    in.depth = last_.depth;
+    char stem[32];
+    std::snprintf(stem, sizeof stem, "%.6f", last_.timestamp_s);
+    in.stem = stem;
+    return in;
+  }
+  bool provides_instances() const override { return segment_; }
+  std::vector<cge::SegmentedInstance> instances(int index) override {
+    const cge::sim::SegmentationResult seg = model_.apply(last_.instance_labels, index);
+    std::map<int, int> classes = class_of_id_;
+    for (const cge::sim::InstanceInfo& i : seg.instances) classes[i.id] = i.class_id;  // false positives
+    return cge::slam::instances_from_label_image(seg.instance_labels, classes, {cge::kCocoPerson});
+  }
+  std::vector<std::pair<double, Eigen::Isometry3d>> ground_truth() const override {
+    std::vector<std::pair<double, Eigen::Isometry3d>> gt;
+    const cge::sim::SequenceSpec& spec = renderer_.spec();
+    for (std::size_t i = 0; i < spec.T_world_camera.size(); ++i) {
+      gt.emplace_back(spec.start_timestamp_s + static_cast<double>(i) / spec.frame_rate_hz, spec.T_world_camera[i]);
+    }
+    return gt;
+  }
+
+ private:
+  cge::sim::SequenceRenderer renderer_;
+  cge::sim::SegmentationErrorModel model_;
+  bool segment_;
+  std::map<int, int> class_of_id_;
+  cge::sim::RenderedFrame last_;
+};
+
+// ---- summary ---------------------------------------------------------------------------------------
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+nlohmann::ordered_json make_summary(const cge::slam::System& system, const Options& opt, const std::string& source,
+                                    const std::vector<std::pair<double, Eigen::Isometry3d>>& ground_truth) {
+  using cge::slam::TrackingState;
+  nlohmann::ordered_json j;
+  const auto& frames = system.frames();
+  int tracked = 0, relocalised = 0;
+  for (const auto& r : frames) {
+    tracked += r.has_pose();
+    relocalised += r.state == TrackingState::relocalised;
+  }
+  j["frames"] = frames.size();
+  j["tracked_frames"] = tracked;
+  j["lost_frames"] = static_cast<int>(frames.size()) - tracked;
+  j["relocalised_frames"] = relocalised;
+  j["keyframes"] = system.map().keyframe_count();
+  j["map_points"] = system.map().map_point_count();
+  int accepted = 0;
+  for (const auto& l : system.loops()) accepted += l.accepted;
+  j["loops"] = {{"candidates", system.loops().size()}, {"accepted", accepted}};
+  j["mode"] = cge::slam::to_string(system.settings().mode);
+  j["segmentation"] = opt.segmentation;
+  j["source"] = source;
+  j["seed"] = opt.seed;
+  nlohmann::ordered_json stages;
+  for (int s = 0; s < cge::slam::kStageCount; ++s) {
+    std::vector<double> ms;
+    double sum = 0;
+    for (const auto& r : frames) {
+      ms.push_back(r.times_ms[static_cast<std::size_t>(s)]);
+      sum += ms.back();
+    }
+    stages[cge::slam::to_string(static_cast<cge::slam::Stage>(s))] = {
+        {"mean_ms", frames.empty() ? 0.0 : sum / static_cast<double>(frames.size())}, {"median_ms", median(ms)}};
+  }
+  // ATE (cge::metrics, as cge_eval ate) when ground truth exists and a frame was tracked.
+  cge::metrics::Trajectory gt, estimate;
+  for (const auto& p : ground_truth) gt.push_back({p.first, p.second});
+  for (const auto& r : frames) {
+    if (r.has_pose()) estimate.push_back({r.timestamp_s, system.pose_of(r)});
+  }
+  if (!gt.empty() && !estimate.empty()) {
+    try {
+      const cge::metrics::AteResult ate = cge::metrics::compute_ate(gt, estimate);
+      const cge::metrics::ErrorStatistics& t = ate.translation_m;
+      j["ate"] = {{"pairs", t.count}, {"rmse_m", t.rmse}, {"mean_m", t.mean}, {"median_m", t.median},
+                  {"std_m", t.std},   {"min_m", t.min},   {"max_m", t.max}};
+    } catch (const std::invalid_argument& e) {
+      j["ate"] = {{"error", e.what()}};
+    }
+  }
+  j["stages"] = stages;
+  return j;
+}
+
+// ---- the run ---------------------------------------------------------------------------------------
+
+int run(Options opt) {
+  cge::slam::SystemSettings settings;
+  try {
+    settings.mode = cge::slam::parse_dynamic_mode(opt.mode);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--mode: ") + e.what());
+  }
+  settings.seed = opt.seed;
+  settings.mapping.reference_min_observations = opt.reference_min_observations;
+  if (opt.frames < 0) throw UsageError("--frames must not be negative, got " + std::to_string(opt.frames));
+  if (opt.out.empty()) throw UsageError("--out must name a folder");
+  if (opt.segmentation.empty())
+    opt.segmentation = settings.mode == cge::slam::DynamicMode::none ? "none" : "ground_truth";
+  const std::set<std::string> kinds = {"none", "ground_truth", "yolo", "precomputed"};
+  if (kinds.count(opt.segmentation) == 0) {
+    throw UsageError("--segmentation: unknown source '" + opt.segmentation +
+                     "' (expected none, ground_truth, yolo or precomputed)");
+  }
+  if (opt.segmentation == "yolo" && opt.model.empty()) throw UsageError("--segmentation yolo needs --model ONNX");
+  if (opt.segmentation == "precomputed" && opt.masks.empty())
+    throw UsageError("--segmentation precomputed needs --masks DIR");
+  std::unique_ptr<cge::bow::Vocabulary> vocabulary;
+  if (!opt.vocabulary.empty()) {
+    vocabulary = std::make_unique<cge::bow::Vocabulary>(cge::bow::Vocabulary::load_file(opt.vocabulary));
+  }
+
+  cge::PinholeIntrinsics<double> intrinsics;
+  std::unique_ptr<cge::dataset::TumSequence> sequence;
+  std::unique_ptr<FrameSource> source;
+  std::unique_ptr<cge::InstanceSegmenter> segmenter;
+  std::string source_name;
+  if (opt.dataset.empty()) {
+    const int frames = opt.frames > 0 ? opt.frames : kDefaultPresetFrames;
+    if (opt.segmentation == "precomputed") throw UsageError("--segmentation precomputed needs --dataset");
+    auto rendered =
+        std::make_unique<RenderedSource>(kDefaultPreset, frames, opt.seed, opt.segmentation == "ground_truth");
+    const cge::sim::PinholeCamera& cam = rendered->camera();
+    intrinsics = {cam.fx_px, cam.fy_px, cam.cx_px, cam.cy_px};
+    settings.frame.depth_units_per_metre = cam.depth_units_per_metre;
+    if (!opt.settings.empty()) apply_settings_file(opt.settings, intrinsics, settings);
+    if (opt.segmentation == "yolo" && cge::slam::uses_masks(settings.mode)) {
+      cge::dataset::SegmentationSourceSettings seg;
+      seg.source = cge::dataset::SegmentationSource::yolo;
+      seg.yolo_model_path = opt.model;
+      segmenter = cge::dataset::make_segmenter(seg, "");
+    }
+    source = std::move(rendered);
+    source_name = std::string(kDefaultPreset) + " rendered (" + std::to_string(frames) + " frames, seed " +
+                  std::to_string(opt.seed) + ")";
+  } else {
+    if (!fs::is_directory(opt.dataset)) throw UsageError("--dataset: '" + opt.dataset + "' is not a folder");
+    cge::dataset::TumSequenceSettings sequence_settings;
+    sequence = std::make_unique<cge::dataset::TumSequence>(opt.dataset, sequence_settings);
+    if (!opt.settings.empty()) {
+      apply_settings_file(opt.settings, intrinsics, settings);
+    } else if (sequence->camera_settings_file()) {
+      apply_settings_file(*sequence->camera_settings_file(), intrinsics, settings);
+    } else {
+      throw UsageError("no settings: " + opt.dataset + " has no camera.yaml (give --settings YAML)");
+    }
+    const int frames = opt.frames > 0 ? std::min(opt.frames, sequence->frame_count()) : sequence->frame_count();
+    source = std::make_unique<DatasetSource>(*sequence, frames);
+    source_name = opt.dataset;
+    cge::dataset::SegmentationSourceSettings seg;
+    seg.source = cge::dataset::parse_segmentation_source(opt.segmentation);
+    seg.yolo_model_path = opt.model;
+    seg.mask_folder = opt.masks;
+    if (cge::slam::uses_masks(settings.mode)) segmenter = cge::dataset::make_segmenter(seg, opt.dataset);
+  }
+  try {
+    settings.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("settings: ") + e.what());
+  }
+
+  OutputFolder out(opt.out, opt.force);
+  cge::slam::System system(settings, intrinsics, std::move(segmenter));
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed_s = [&start] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  const bool progress = ::isatty(::fileno(stderr)) != 0;
+  const int n = source->frame_count();
+  const bool own_instances = source->provides_instances() && cge::slam::uses_masks(settings.mode);
+  for (int i = 0; i < n; ++i) {
+    const cge::slam::FrameInput input = source->frame(i);
+    if (i == 0 && vocabulary != nullptr) {
+      system.set_loop_closer(
+          std::make_unique<cge::slam::LoopCloser>(std::move(*vocabulary), intrinsics, input.bgr.cols, input.bgr.rows));
+    }
+    if (own_instances) {
+      const auto seg_start = std::chrono::steady_clock::now();
+      const std::vector<cge::SegmentedInstance> instances = source->instances(i);
+      const double seg_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - seg_start).count();
+      system.process(input, instances, seg_ms);
+    } else {
+      system.process(input);
+    }
+    if (progress) draw_progress(i + 1, n, elapsed_s());
+  }
+  system.finish();
+
+  out.write("trajectory.txt", [&](std::ostream& f) { cge::slam::write_trajectory(f, system); });
+  out.write("keyframes.txt", [&](std::ostream& f) { cge::slam::write_keyframes(f, system.map()); });
+  out.write("loops.csv", [&](std::ostream& f) { cge::slam::write_loops_csv(f, system.loops()); });
+  out.write("frames.csv", [&](std::ostream& f) { cge::slam::write_frames_csv(f, system.frames()); });
+  out.write("timings.csv", [&](std::ostream& f) { cge::slam::write_timings_csv(f, system.frames()); });
+  const auto gt = source->ground_truth();
+  const nlohmann::ordered_json summary = make_summary(system, opt, source_name, gt);
+  out.write("summary.json", [&](std::ostream& f) { f << summary.dump(2) << '\n'; });
+  if (opt.dataset.empty() && !gt.empty()) {
+    out.write("groundtruth.txt", [&](std::ostream& f) {
+      f << "# ground truth trajectory of the rendered sequence: timestamp tx ty tz qx qy qz qw\n";
+      for (const auto& p : gt) f << cge::slam::tum_pose_line(p.first, p.second) << '\n';
+    });
+  }
+  out.commit();
+
+  std::printf("%s: %d frames, %d tracked, %d lost, %d keyframes; wrote %s in %.1f s\n", kProgram, n,
+              summary["tracked_frames"].get<int>(), summary["lost_frames"].get<int>(), system.map().keyframe_count(),
+              opt.out.c_str(), elapsed_s());
+  std::fflush(stdout);
+  if (std::ferror(stdout)) {
+    std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  CLI::App app{"Runs the cge reference SLAM pipeline (cge " CGE_VERSION_STRING
+               ") on an RGB-D sequence in the TUM layout, or without --dataset on the\n"
+               "walking_xyz synthetic preset rendered in memory, and writes trajectory.txt, keyframes.txt,\n"
+               "loops.csv, frames.csv, timings.csv and summary.json into --out.",
+               kProgram};
+  app.set_version_flag("--version", std::string(kProgram) + " " + CGE_VERSION_STRING);
+  app.add_option("--dataset", opt.dataset, "TUM folder (rgb.txt, depth.txt, camera.yaml); none: render walking_xyz");
+  app.add_option("--mode", opt.mode, "dynamic handling: none, Y (masks), YM (masks + MAD), YMK (+ patch keyframes)")
+      ->capture_default_str();
+  app.add_option("--segmentation", opt.segmentation,
+                 "none, ground_truth (the synthetic segmentation/ folder, or the rendered masks), yolo, precomputed "
+                 "(default: ground_truth, none in mode none)");
+  app.add_option("--model", opt.model, "YOLOv8-seg ONNX model (--segmentation yolo)");
+  app.add_option("--masks", opt.masks, "mask folder (--segmentation precomputed)");
+  app.add_option("--settings", opt.settings, "ORB-SLAM2 TUM YAML settings (default: DATASET/camera.yaml)");
+  app.add_option("--vocabulary", opt.vocabulary,
+                 "bag-of-words vocabulary (cge_vocab) enabling loop closing; detections only, no correction yet");
+  app.add_option("--seed", opt.seed, "seed of the MAD samples (and of the rendered sequence)")->capture_default_str();
+  app.add_option("--frames", opt.frames, "process at most this many frames (rendered: default 300)");
+  app.add_option("--reference-min-observations", opt.reference_min_observations,
+                 "ORB-SLAM2 keyframe baseline: count the reference keyframe's map points seen by >= this many "
+                 "keyframes (ORB-SLAM2's nMinObs)")
+      ->capture_default_str();
+  app.add_option("--out", opt.out, "output folder; must not exist or be empty, unless --force")->required();
+  app.add_flag("--force", opt.force, "write into a non-empty folder: replace cge_slam's own files, delete nothing");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
+    return kExitUsage;
+  }
+  const auto end_progress_line = [] {
+    if (progress_line_open) std::fputc('\n', stderr);
+  };
+  try {
+    return run(opt);
+  } catch (const UsageError& e) {
+    end_progress_line();
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  } catch (const std::invalid_argument& e) {
+    end_progress_line();
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitUsage;
+  } catch (const std::exception& e) {
+    end_progress_line();
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitFailure;
+  }
+}

@@ -1,0 +1,77 @@
+#pragma once
+// Frame: one RGB-D image pair reduced to what tracking needs (ORB keypoints and descriptors, a 3-D
+// point per keypoint from depth, a dynamic label per keypoint), and FrameMaker, which makes it in
+// two timed steps: extract() (features and depth) and label() (dynamic elimination by mode).
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+
+#include "cge/core/pinhole_intrinsics.hpp"
+#include "cge/core/semantic_instance.hpp"
+#include "cge/frontend/depth_mad_filter.hpp"
+#include "cge/frontend/feature_label.hpp"
+#include "cge/segmentation/instance_segmenter.hpp"
+#include "cge/slam/settings.hpp"
+
+namespace cge {
+namespace slam {
+
+struct Frame {
+  int index = 0;           ///< frame number in the sequence
+  double timestamp_s = 0;  ///< seconds
+  cv::Size image_size;     ///< pixels
+
+  std::vector<cv::KeyPoint> keypoints;           ///< level-0 pixel positions
+  cv::Mat descriptors;                           ///< CV_8UC1, one 32-byte ORB row per keypoint
+  std::vector<FeatureLabel> labels;              ///< all static until label()
+  std::vector<Eigen::Vector3d> points_camera_m;  ///< back-projected; NaN where depth is missing
+
+  std::vector<SemanticInstance<double>> instances;  ///< every segmented instance (all classes)
+  cv::Mat dynamic_mask;                             ///< CV_8UC1, 255 on dynamic instances; empty when none was given
+
+  cv::Mat bgr;      ///< the colour image (shared with the caller's Mat, not copied)
+  cv::Mat depth_m;  ///< CV_32FC1 metres, 0 where invalid
+
+  int size() const { return static_cast<int>(keypoints.size()); }
+  bool has_depth(int i) const { return std::isfinite(points_camera_m[static_cast<std::size_t>(i)].z()); }
+  bool is_static(int i) const { return labels[static_cast<std::size_t>(i)] == FeatureLabel::static_feature; }
+  int count(FeatureLabel label) const;
+};
+
+/// The seed of frame `frame_index`'s MAD samples: a mix (splitmix64) of the run's seed and the
+/// index, so a frame's labels depend on that frame alone.
+std::uint64_t frame_seed(std::uint64_t seed, int frame_index);
+
+class FrameMaker {
+ public:
+  /// Throws std::invalid_argument for bad settings or intrinsics.
+  FrameMaker(const SystemSettings& settings, const PinholeIntrinsics<double>& intrinsics);
+
+  /// ORB features of `bgr` (CV_8UC3) and their depth from `depth` (CV_16UC1 in
+  /// settings.frame.depth_units_per_metre units, or CV_32FC1 metres) of the same size. Labels are
+  /// all static. Throws std::invalid_argument naming the problem for empty images, wrong types or
+  /// sizes that differ.
+  Frame extract(int index, double timestamp_s, const cv::Mat& bgr, const cv::Mat& depth);
+
+  /// Dynamic elimination of `frame` by the mode: none leaves every label static; Y labels keypoints
+  /// on a dynamic instance's mask dynamic_by_mask; YM and YMK run the DepthMADFilter (mask test and
+  /// MAD test) with a per-frame engine seeded by frame_seed(settings.seed, frame.index). Stores the
+  /// instances (as SemanticInstance) and the union of the dynamic masks in the frame.
+  void label(Frame& frame, const std::vector<SegmentedInstance>& instances);
+
+  const PinholeIntrinsics<double>& intrinsics() const { return intrinsics_; }
+  const SystemSettings& settings() const { return settings_; }
+
+ private:
+  std::vector<cv::KeyPoint> detect(const cv::Mat& gray, int fast_threshold, cv::Mat& descriptors) const;
+
+  SystemSettings settings_;
+  PinholeIntrinsics<double> intrinsics_;
+  DepthMADFilter<> mad_filter_;
+};
+
+}  // namespace slam
+}  // namespace cge

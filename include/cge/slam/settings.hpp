@@ -1,0 +1,163 @@
+#pragma once
+// Settings of the reference pipeline's tracking front (Frame, Tracker, System): every threshold with
+// its unit and default. Defaults marked "ORB-SLAM2" are that system's TUM RGB-D values; the rest
+// are ours, chosen on the synthetic walking sequences (docs in the pipeline's report).
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "cge/ceres/pose_refinement.hpp"
+#include "cge/frontend/depth_mad_filter.hpp"
+#include "cge/frontend/keyframe_policy.hpp"
+
+namespace cge {
+namespace slam {
+
+/// Dynamic handling of the ablation (ALGORITHMS.md section 8, issue 5).
+enum class DynamicMode : std::uint8_t {
+  none,  ///< no dynamic handling, ORB-SLAM2-style keyframes (the baseline)
+  Y,     ///< mask test only (labels dynamic_by_mask), ORB-SLAM2-style keyframes
+  YM,    ///< masks + depth MAD (DepthMADFilter), ORB-SLAM2-style keyframes
+  YMK,   ///< YM + PatchKeyframeSelector
+};
+
+inline const char* to_string(DynamicMode mode) {
+  switch (mode) {
+    case DynamicMode::none:
+      return "none";
+    case DynamicMode::Y:
+      return "Y";
+    case DynamicMode::YM:
+      return "YM";
+    case DynamicMode::YMK:
+      return "YMK";
+  }
+  return "invalid";
+}
+
+/// "none", "Y", "YM" or "YMK"; throws std::invalid_argument naming the accepted values otherwise.
+inline DynamicMode parse_dynamic_mode(const std::string& name) {
+  if (name == "none") return DynamicMode::none;
+  if (name == "Y") return DynamicMode::Y;
+  if (name == "YM") return DynamicMode::YM;
+  if (name == "YMK") return DynamicMode::YMK;
+  throw std::invalid_argument("unknown mode '" + name + "' (expected none, Y, YM or YMK)");
+}
+
+inline bool uses_masks(DynamicMode mode) { return mode != DynamicMode::none; }
+inline bool uses_mad(DynamicMode mode) { return mode == DynamicMode::YM || mode == DynamicMode::YMK; }
+inline KeyframePolicyKind keyframe_policy_of(DynamicMode mode) {
+  return mode == DynamicMode::YMK ? KeyframePolicyKind::patch : KeyframePolicyKind::orbslam2;
+}
+
+/// ORB extractor (the ORBextractor.* keys of an ORB-SLAM2 settings file).
+struct OrbSettings {
+  int features = 1000;              ///< nFeatures: keypoints per frame (ORB-SLAM2 TUM: 1000)
+  double scale_factor = 1.2;        ///< scaleFactor: pyramid scale between levels, > 1
+  int levels = 8;                   ///< nLevels: pyramid levels, >= 1
+  int initial_fast_threshold = 20;  ///< iniThFAST: FAST threshold, intensity levels
+  /// minThFAST: used for a second detection when the first finds fewer than `features` keypoints
+  /// (cv::ORB has one threshold per call, not ORB-SLAM2's per-cell fallback).
+  int min_fast_threshold = 7;
+  int edge_threshold_px = 19;  ///< border without keypoints, pixels (ORB-SLAM2: 19)
+  int patch_size_px = 31;      ///< ORB patch size, pixels (ORB-SLAM2: 31)
+};
+
+/// What a Frame is made of.
+struct FrameSettings {
+  OrbSettings orb;
+  double depth_units_per_metre = 5000;  ///< depth image scale (TUM: 5000 units = 1 m)
+  double min_depth_m = 0.1;             ///< closer depths are treated as missing, metres
+  /// Farther depths are treated as missing, metres (ORB-SLAM2 keeps points closer than 40 baselines,
+  /// 40 * 0.08 m = 3.2 m on TUM; ours is wider because the synthetic depth is reliable further).
+  double max_depth_m = 6.0;
+  DepthMADSettings mad;  ///< the filter of modes YM and YMK (paper defaults)
+};
+
+/// Tracking: prediction, matching to the local map, PnP, quality check, relocalisation.
+struct TrackerSettings {
+  int local_recent_keyframes = 5;      ///< local map: the last keyframes, count
+  int local_covisible_keyframes = 10;  ///< local map: covisible keyframes of the reference keyframe, count
+  double search_radius_px = 15;        ///< matching: window around a projected map point, pixels
+  /// When fewer than min_matches are found, matching is repeated once with a radius this many
+  /// times larger (a sudden change of motion), dimensionless.
+  double wide_search_factor = 3;
+  int max_hamming = 64;              ///< matching: largest descriptor distance accepted, bits of 256
+  double ratio = 0.9;                ///< matching: best distance < ratio * second best (within the window)
+  int min_matches = 20;              ///< fewer matches than this: try the wide search, then relocalise
+  int pnp_iterations = 100;          ///< RANSAC iterations of cv::solvePnPRansac
+  double pnp_reprojection_px = 3.0;  ///< RANSAC inlier threshold, pixels
+  double pnp_confidence = 0.99;      ///< RANSAC confidence, in (0, 1)
+  /// Inliers under this after refinement: the frame is lost (ORB-SLAM2 RGB-D: 30 in the local map).
+  int min_inliers = 30;
+  /// A tracked pose farther than this from the prediction is rejected as a wrong solution (the
+  /// camera moves some centimetres per frame), metres.
+  double max_jump_m = 0.3;
+  /// Motion-only refinement of the PnP pose (Ceres, Huber loss, chi2 outlier rounds; ORB-SLAM2's
+  /// values). Each match's pixel sigma is scale_factor^octave of its keypoint.
+  PoseRefinementSettings refinement;
+  /// The first frame initialises the map only with at least this many static keypoints with
+  /// depth (ORB-SLAM2 RGB-D: 500); with fewer it is reported lost and the next frame tries.
+  int min_initial_points = 100;
+  int relocalisation_keyframes = 10;    ///< relocalisation tries the last keyframes, count
+  int min_relocalisation_inliers = 50;  ///< PnP inliers to accept a relocalisation
+};
+
+/// Map points created from depth.
+struct MappingSettings {
+  /// New map points only from keypoints closer than this, metres (depth noise grows with range).
+  double max_new_point_depth_m = 5.0;
+  /// The ORB-SLAM2 baseline compares a frame's tracked points with the reference keyframe's map
+  /// points seen by at least this many keyframes, >= 1 (2 at most while the map has at most 2
+  /// keyframes). Default 1: every map point the reference keyframe observes, as the baseline's
+  /// contract states (cge/frontend/orbslam2_keyframe_policy.hpp); ORB-SLAM2's own nMinObs is 3,
+  /// which on walking_xyz inserts a keyframe only at the 30-frame gap (docs/SLAM.md).
+  int reference_min_observations = 1;
+};
+
+/// Everything the System needs. Validate with validate(); throws std::invalid_argument naming a field.
+struct SystemSettings {
+  DynamicMode mode = DynamicMode::YMK;
+  FrameSettings frame;
+  TrackerSettings tracker;
+  MappingSettings mapping;
+  PatchKeyframeSettings<double> patch_keyframes;        ///< mode YMK
+  OrbSlam2KeyframeSettings<double> orbslam2_keyframes;  ///< modes none, Y, YM
+  std::uint64_t seed = 0;             ///< the MAD filter's samples: frame i uses a seed derived from (seed, i)
+  bool keep_keyframe_images = false;  ///< keep bgr/depth in keyframes (for the dense maps of issue 6)
+
+  void validate() const {
+    const auto fail = [](const std::string& what) { throw std::invalid_argument("SystemSettings: " + what); };
+    const OrbSettings& o = frame.orb;
+    if (o.features < 1) fail("frame.orb.features must be at least 1");
+    if (!(o.scale_factor > 1)) fail("frame.orb.scale_factor must be > 1");
+    if (o.levels < 1) fail("frame.orb.levels must be at least 1");
+    if (o.initial_fast_threshold < 1 || o.min_fast_threshold < 1) fail("frame.orb FAST thresholds must be >= 1");
+    if (!(frame.depth_units_per_metre > 0)) fail("frame.depth_units_per_metre must be > 0");
+    if (!(frame.min_depth_m >= 0 && frame.max_depth_m > frame.min_depth_m)) fail("frame depth range is empty");
+    frame.mad.validate();
+    const TrackerSettings& t = tracker;
+    if (t.local_recent_keyframes < 1) fail("tracker.local_recent_keyframes must be at least 1");
+    if (t.local_covisible_keyframes < 0) fail("tracker.local_covisible_keyframes must not be negative");
+    if (!(t.search_radius_px > 0)) fail("tracker.search_radius_px must be > 0");
+    if (!(t.wide_search_factor >= 1)) fail("tracker.wide_search_factor must be >= 1");
+    if (t.max_hamming < 0 || t.max_hamming > 256) fail("tracker.max_hamming must be in 0 .. 256");
+    if (!(t.ratio > 0 && t.ratio <= 1)) fail("tracker.ratio must be in (0, 1]");
+    if (t.min_matches < 4 || t.min_inliers < 4) fail("tracker.min_matches and min_inliers must be at least 4");
+    if (t.pnp_iterations < 1) fail("tracker.pnp_iterations must be at least 1");
+    if (!(t.pnp_reprojection_px > 0)) fail("tracker.pnp_reprojection_px must be > 0");
+    if (!(t.pnp_confidence > 0 && t.pnp_confidence < 1)) fail("tracker.pnp_confidence must be in (0, 1)");
+    if (!(t.max_jump_m > 0)) fail("tracker.max_jump_m must be > 0");
+    t.refinement.validate();
+    if (t.min_initial_points < 4) fail("tracker.min_initial_points must be at least 4");
+    if (t.relocalisation_keyframes < 0) fail("tracker.relocalisation_keyframes must not be negative");
+    if (t.min_relocalisation_inliers < 4) fail("tracker.min_relocalisation_inliers must be at least 4");
+    if (!(mapping.max_new_point_depth_m > 0)) fail("mapping.max_new_point_depth_m must be > 0");
+    if (mapping.reference_min_observations < 1) fail("mapping.reference_min_observations must be at least 1");
+    patch_keyframes.validate();
+    orbslam2_keyframes.validate();
+  }
+};
+
+}  // namespace slam
+}  // namespace cge

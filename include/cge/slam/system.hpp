@@ -1,0 +1,156 @@
+#pragma once
+// System: the reference pipeline assembled from its components (kiss-icp's pipeline class is the
+// model: settings in, frames in, results out). It owns the segmentation source, the frame maker,
+// the tracker, the keyframe policy and the map, and times each stage.
+//
+// Per frame (process): segmentation (modes Y, YM, YMK; skipped in mode none) -> features and depth
+// -> dynamic elimination -> tracking -> keyframe decision and insertion (new map points from
+// depth) -> after_keyframe_inserted(): the place of loop closing and optimisation (section 7),
+// which the loop closer plugs into. Call finish() after the last frame (the patch policy may still
+// insert a pending keyframe).
+//
+// Deterministic: the same frames, instances and settings give the same records and map.
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "cge/core/pinhole_intrinsics.hpp"
+#include "cge/frontend/keyframe_policy.hpp"
+#include "cge/segmentation/instance_segmenter.hpp"
+#include "cge/slam/frame.hpp"
+#include "cge/slam/map.hpp"
+#include "cge/slam/settings.hpp"
+#include "cge/slam/tracker.hpp"
+
+namespace cge {
+namespace slam {
+
+/// One RGB-D frame as the System takes it.
+struct FrameInput {
+  int index = 0;           ///< 0, 1, 2, ... strictly increasing
+  double timestamp_s = 0;  ///< seconds
+  cv::Mat bgr;             ///< CV_8UC3
+  cv::Mat depth;           ///< CV_16UC1 in settings.frame.depth_units_per_metre units, or CV_32FC1 metres
+  std::string stem;        ///< the RGB file name without extension (what mask folders are keyed by)
+};
+
+/// Stages timed per frame, in the column order of timings.csv.
+enum class Stage : int {
+  segmentation,
+  features,
+  dynamic_filter,
+  tracking,
+  keyframe,
+  loop_closing,
+  optimisation,
+  total
+};
+constexpr int kStageCount = 8;
+/// "segmentation", "features", ... "total".
+const char* to_string(Stage stage);
+
+/// What happened to one frame.
+struct FrameRecord {
+  int index = 0;
+  double timestamp_s = 0;
+  TrackingState state = TrackingState::lost;
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  ///< as tracked (meaningful unless lost)
+  int reference_keyframe = -1;  ///< the keyframe the pose is kept relative to (-1 when lost)
+  Eigen::Isometry3d T_reference_camera = Eigen::Isometry3d::Identity();
+  int keypoints = 0;
+  int dynamic_by_mask = 0;
+  int dynamic_by_mad = 0;
+  int instances = 0;  ///< segmented instances, all classes
+  int matches = 0;
+  int inliers = 0;
+  int keyframe_id = -1;                ///< the keyframe made from this frame (possibly decided a few frames later)
+  const char* keyframe_rule = "none";  ///< the policy rule that made it one
+  std::array<double, kStageCount> times_ms{};  ///< per Stage, milliseconds (measurements)
+
+  bool has_pose() const { return state != TrackingState::lost; }
+};
+
+/// One decision of the loop closer, as loops.csv lists it.
+struct LoopRecord {
+  int query_keyframe = -1;
+  double query_timestamp_s = 0;
+  int match_keyframe = -1;  ///< -1: no candidate
+  double match_timestamp_s = 0;
+  double bow_score = 0;
+  double cge_score = 0;
+  int matched_points = 0;
+  bool accepted = false;
+  std::string reason =
+      "no_candidates";  ///< accepted, no_candidates, low_score, continuity, too_few_matches, pose_not_robust
+};
+
+class LoopCloser;
+
+class System {
+ public:
+  /// Throws std::invalid_argument for bad settings or intrinsics. `segmenter` may be null: no
+  /// instances (modes Y/YM/YMK then behave as none, apart from the keyframe policy).
+  System(const SystemSettings& settings, const PinholeIntrinsics<double>& intrinsics,
+         std::unique_ptr<InstanceSegmenter> segmenter = nullptr);
+  ~System();
+  System(System&&) noexcept;
+  System& operator=(System&&) noexcept;
+
+  /// Enables loop closing (section 7): after each keyframe insertion the closer processes the new
+  /// keyframe and its decision becomes a LoopRecord. Accepted loops are recorded, not yet corrected
+  /// (pose-graph optimisation is not wired in). Set it before the first frame.
+  void set_loop_closer(std::unique_ptr<LoopCloser> loop_closer);
+
+  /// One frame, segmented by the owned segmenter (not in mode none). Throws std::invalid_argument
+  /// for bad images (the message names the frame) or a frame index not greater than the last.
+  const FrameRecord& process(const FrameInput& input);
+  /// One frame with its instances given (segmentation_ms is recorded as the segmentation time).
+  const FrameRecord& process(const FrameInput& input, const std::vector<SegmentedInstance>& instances,
+                             double segmentation_ms = 0);
+  /// End of sequence: lets the keyframe policy insert its last pending candidate.
+  void finish();
+
+  const SystemSettings& settings() const { return settings_; }
+  const std::vector<FrameRecord>& frames() const { return records_; }
+  const Map& map() const { return map_; }
+  const std::vector<LoopRecord>& loops() const { return loops_; }
+  /// The current pose estimate of a frame: its reference keyframe's current pose times the
+  /// relative pose at tracking time (so optimisation of keyframes moves the whole trajectory).
+  Eigen::Isometry3d pose_of(const FrameRecord& record) const;
+
+ private:
+  struct Pending {
+    Frame frame;
+    TrackResult track;
+    std::size_t record = 0;
+  };
+  void decide_keyframe(Frame& frame, TrackResult& track, std::size_t record);
+  void apply_decision(const KeyframeDecision<double>& decision, Frame* current, TrackResult* track, std::size_t record);
+  int insert_keyframe(const Frame& frame, const TrackResult& track, std::size_t record, const char* rule);
+  /// After a keyframe is in the map: loop closing (section 7) and the optimisation it triggers.
+  /// The loop closer appends its decision to loops_ and corrects poses through map_; timed as the
+  /// loop_closing and optimisation stages of the current frame.
+  void after_keyframe_inserted(int keyframe_id);
+
+  SystemSettings settings_;
+  PinholeIntrinsics<double> intrinsics_;
+  std::unique_ptr<InstanceSegmenter> segmenter_;
+  FrameMaker frame_maker_;
+  Tracker tracker_;
+  KeyframePolicy<double> keyframe_policy_;
+  Map map_;
+  std::vector<FrameRecord> records_;
+  std::vector<LoopRecord> loops_;
+  std::deque<Pending> pending_;
+  std::unique_ptr<LoopCloser> loop_closer_;
+};
+
+}  // namespace slam
+}  // namespace cge

@@ -1,0 +1,94 @@
+#pragma once
+// Tracker: the camera pose of each frame against the map (ALGORITHMS.md section 8). Per frame:
+// constant-velocity prediction; projection of the local map's points (those seen by the last
+// keyframes and by the reference keyframe's covisible ones) into the frame and matching to its
+// static keypoints by descriptor in a window; PnP with RANSAC on the matches; refinement by
+// minimising reprojection error on the inliers; a quality check. When it fails: relocalisation
+// against the last keyframes (descriptor matching + PnP), else the frame is reported lost. The
+// first frame (empty map) is reported `initialised` at the identity pose: the System makes it the
+// first keyframe with map points from depth (RGB-D needs no two-view initialisation).
+//
+// Refinement: PoseRefiner (cge/ceres/pose_refinement.hpp) on every match from the RANSAC pose; its
+// chi2 classification gives the inliers.
+//
+// Deterministic: cv::solvePnPRansac draws from its own fixed-seed generator, matching visits map
+// points and keypoints in id order, Ceres runs single-threaded.
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "cge/core/pinhole_intrinsics.hpp"
+#include "cge/slam/frame.hpp"
+#include "cge/slam/map.hpp"
+#include "cge/slam/settings.hpp"
+
+namespace cge {
+namespace slam {
+
+enum class TrackingState : std::uint8_t {
+  initialised,  ///< first frame: the map starts here
+  tracked,      ///< pose from the local map
+  relocalised,  ///< pose from relocalisation after a failure
+  lost,         ///< no pose
+};
+
+/// "initialised", "tracked", "relocalised" or "lost".
+const char* to_string(TrackingState state);
+
+struct TrackResult {
+  TrackingState state = TrackingState::lost;
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  ///< meaningful unless lost
+  int matches = 0;                                                   ///< map points matched before PnP
+  int inliers = 0;  ///< matches consistent with the final pose (the tracked map points)
+  /// Per keypoint of the frame: the map point it was matched to (inliers only), -1 otherwise.
+  std::vector<std::int64_t> map_point_ids;
+  /// The keyframe sharing most tracked points (the local map's centre); -1 when lost or initialised.
+  int reference_keyframe = -1;
+
+  bool has_pose() const { return state != TrackingState::lost; }
+};
+
+class Tracker {
+ public:
+  /// orb_scale_factor: the ORB pyramid's scale between levels (a keypoint of octave o has a pixel
+  /// sigma of orb_scale_factor^o in the refinement).
+  Tracker(const TrackerSettings& settings, const PinholeIntrinsics<double>& intrinsics, double orb_scale_factor = 1.2);
+
+  /// The pose of `frame` (its static keypoints only are used) against `map`.
+  TrackResult track(const Frame& frame, const Map& map);
+
+  /// Tells the tracker about a keyframe just inserted from the frame it last tracked: it becomes
+  /// the reference of the local map.
+  void set_reference_keyframe(int keyframe_id) { reference_keyframe_ = keyframe_id; }
+  int reference_keyframe() const { return reference_keyframe_; }
+
+  const TrackerSettings& settings() const { return settings_; }
+
+ private:
+  struct Attempt;
+  bool track_local_map(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction, Attempt& out) const;
+  bool relocalise(const Frame& frame, const Map& map, Attempt& out) const;
+  int match_by_projection(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
+                          const Eigen::Isometry3d& T_world_camera, double radius_px,
+                          std::vector<std::int64_t>& matches) const;
+  bool ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches, int min_inliers,
+                   Eigen::Isometry3d& T_world_camera) const;
+  bool refine_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches,
+                   const Eigen::Isometry3d& T_initial, int min_inliers, Attempt& out) const;
+  bool refine_with_local_map(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
+                             const Eigen::Isometry3d& T_initial, Attempt& out) const;
+  std::vector<std::int64_t> local_map_points(const Map& map) const;
+
+  TrackerSettings settings_;
+  PinholeIntrinsics<double> intrinsics_;
+  double orb_scale_factor_;
+  PoseRefiner refiner_;
+  bool has_last_ = false;
+  Eigen::Isometry3d T_world_last_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_last_current_velocity_ = Eigen::Isometry3d::Identity();  ///< last frame-to-frame motion
+  int reference_keyframe_ = -1;
+};
+
+}  // namespace slam
+}  // namespace cge

@@ -1,0 +1,127 @@
+#include "cge/slam/frame.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include "cge/opencv.hpp"
+
+namespace cge {
+namespace slam {
+
+int Frame::count(FeatureLabel label) const { return static_cast<int>(std::count(labels.begin(), labels.end(), label)); }
+
+std::uint64_t frame_seed(std::uint64_t seed, int frame_index) {
+  // splitmix64 of the seed advanced by the index: distinct, well-mixed seeds per frame.
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ULL * (static_cast<std::uint64_t>(frame_index) + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+FrameMaker::FrameMaker(const SystemSettings& settings, const PinholeIntrinsics<double>& intrinsics)
+    : settings_(settings), intrinsics_(intrinsics), mad_filter_(settings.frame.mad) {
+  settings_.validate();
+  const auto ok = [](double v) { return std::isfinite(v); };
+  if (!(ok(intrinsics.fx_px) && intrinsics.fx_px > 0 && ok(intrinsics.fy_px) && intrinsics.fy_px > 0 &&
+        ok(intrinsics.cx_px) && ok(intrinsics.cy_px))) {
+    throw std::invalid_argument("FrameMaker: the intrinsics must be finite with positive focal lengths");
+  }
+}
+
+std::vector<cv::KeyPoint> FrameMaker::detect(const cv::Mat& gray, int fast_threshold, cv::Mat& descriptors) const {
+  const OrbSettings& o = settings_.frame.orb;
+  cv::Ptr<cv::ORB> orb = cv::ORB::create(o.features, static_cast<float>(o.scale_factor), o.levels, o.edge_threshold_px,
+                                         0, 2, cv::ORB::HARRIS_SCORE, o.patch_size_px, fast_threshold);
+  std::vector<cv::KeyPoint> keypoints;
+  orb->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
+  return keypoints;
+}
+
+Frame FrameMaker::extract(int index, double timestamp_s, const cv::Mat& bgr, const cv::Mat& depth) {
+  const std::string where = "frame " + std::to_string(index) + ": ";
+  if (bgr.empty()) throw std::invalid_argument(where + "the colour image is empty");
+  if (bgr.type() != CV_8UC3) {
+    throw std::invalid_argument(where + "the colour image has type " + cv::typeToString(bgr.type()) +
+                                ", expected CV_8UC3");
+  }
+  if (depth.empty()) throw std::invalid_argument(where + "the depth image is empty");
+  if (depth.type() != CV_16UC1 && depth.type() != CV_32FC1) {
+    throw std::invalid_argument(where + "the depth image has type " + cv::typeToString(depth.type()) +
+                                ", expected CV_16UC1 or CV_32FC1");
+  }
+  if (depth.size() != bgr.size()) {
+    throw std::invalid_argument(where + "the depth image is " + std::to_string(depth.cols) + " x " +
+                                std::to_string(depth.rows) + " pixels but the colour image " +
+                                std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows));
+  }
+  Frame f;
+  f.index = index;
+  f.timestamp_s = timestamp_s;
+  f.image_size = bgr.size();
+  f.bgr = bgr;
+  if (depth.type() == CV_16UC1) {
+    depth.convertTo(f.depth_m, CV_32F, 1.0 / settings_.frame.depth_units_per_metre);
+  } else {
+    f.depth_m = depth.clone();
+  }
+
+  cv::Mat gray;
+  cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
+  const OrbSettings& o = settings_.frame.orb;
+  f.keypoints = detect(gray, o.initial_fast_threshold, f.descriptors);
+  if (static_cast<int>(f.keypoints.size()) < o.features && o.min_fast_threshold < o.initial_fast_threshold) {
+    f.keypoints = detect(gray, o.min_fast_threshold, f.descriptors);
+  }
+
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  f.labels.assign(f.keypoints.size(), FeatureLabel::static_feature);
+  f.points_camera_m.assign(f.keypoints.size(), Eigen::Vector3d(nan, nan, nan));
+  for (std::size_t i = 0; i < f.keypoints.size(); ++i) {
+    const cv::Point2f& p = f.keypoints[i].pt;
+    // The keypoint's pixel: nearest centre, as the MAD filter reads it.
+    const int col = std::clamp(static_cast<int>(std::lround(p.x)), 0, f.depth_m.cols - 1);
+    const int row = std::clamp(static_cast<int>(std::lround(p.y)), 0, f.depth_m.rows - 1);
+    const double d = f.depth_m.at<float>(row, col);
+    if (std::isfinite(d) && d > settings_.frame.min_depth_m && d < settings_.frame.max_depth_m) {
+      f.points_camera_m[i] = intrinsics_.backproject(p.x, p.y, d);
+    }
+  }
+  return f;
+}
+
+void FrameMaker::label(Frame& frame, const std::vector<SegmentedInstance>& instances) {
+  frame.instances.clear();
+  for (const SegmentedInstance& inst : instances) frame.instances.push_back(to_semantic_instance<double>(inst));
+  frame.dynamic_mask = union_dynamic_masks(instances, frame.image_size);
+  const DynamicMode mode = settings_.mode;
+  std::fill(frame.labels.begin(), frame.labels.end(), FeatureLabel::static_feature);
+  if (!uses_masks(mode)) return;
+  if (!uses_mad(mode)) {
+    // Mask test only (step 1 of the filter), on the pixel the filter would read.
+    for (std::size_t i = 0; i < frame.keypoints.size(); ++i) {
+      const cv::Point2f& p = frame.keypoints[i].pt;
+      const int col = std::clamp(static_cast<int>(std::lround(p.x)), 0, frame.image_size.width - 1);
+      const int row = std::clamp(static_cast<int>(std::lround(p.y)), 0, frame.image_size.height - 1);
+      if (frame.dynamic_mask.at<std::uint8_t>(row, col) != 0) frame.labels[i] = FeatureLabel::dynamic_by_mask;
+    }
+    return;
+  }
+  std::vector<DynamicInstance<cv::Mat>> dynamic;
+  for (const SegmentedInstance& inst : instances) {
+    if (inst.dynamic && cv::countNonZero(inst.mask) > 0) {
+      dynamic.push_back(dynamic_instance(inst.mask, filter_box(inst, frame.image_size), inst.class_id));
+    }
+  }
+  mad_filter_.engine.seed(frame_seed(settings_.seed, frame.index));
+  const DepthMADResult result =
+      mad_filter_.filter(frame.keypoints, opencv::DepthView::from_metres(frame.depth_m), dynamic);
+  frame.labels = result.labels;
+}
+
+}  // namespace slam
+}  // namespace cge

@@ -1,0 +1,75 @@
+#include "cge/slam/output_files.hpp"
+
+#include <cstdio>
+
+namespace cge {
+namespace slam {
+
+namespace {
+
+std::string format(const char* fmt, double v) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, fmt, v);
+  return buffer;
+}
+
+}  // namespace
+
+std::string tum_pose_line(double timestamp_s, const Eigen::Isometry3d& T_world_camera) {
+  Eigen::Quaterniond q(T_world_camera.linear());
+  q.normalize();
+  if (q.w() < 0) q.coeffs() = -q.coeffs();
+  const Eigen::Vector3d& t = T_world_camera.translation();
+  std::string line = format("%.6f", timestamp_s);
+  for (const double v : {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()}) line += " " + format("%.9g", v);
+  return line;
+}
+
+void write_trajectory(std::ostream& out, const System& system) {
+  out << "# cge_slam trajectory: timestamp tx ty tz qx qy qz qw (T_world_camera, metres), lost frames omitted\n";
+  for (const FrameRecord& r : system.frames()) {
+    if (r.has_pose()) out << tum_pose_line(r.timestamp_s, system.pose_of(r)) << '\n';
+  }
+}
+
+void write_keyframes(std::ostream& out, const Map& map) {
+  out << "# cge_slam keyframes: timestamp tx ty tz qx qy qz qw (T_world_camera, metres)\n";
+  for (const Keyframe& kf : map.keyframes()) out << tum_pose_line(kf.timestamp_s, kf.T_world_camera) << '\n';
+}
+
+void write_loops_csv(std::ostream& out, const std::vector<LoopRecord>& loops) {
+  out << "query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,"
+         "reason\n";
+  for (const LoopRecord& l : loops) {
+    const bool match = l.match_keyframe >= 0;
+    out << format("%.6f", l.query_timestamp_s) << ',' << (match ? format("%.6f", l.match_timestamp_s) : "") << ','
+        << l.query_keyframe << ',' << (match ? std::to_string(l.match_keyframe) : "") << ','
+        << (match ? format("%.9g", l.bow_score) : "") << ',' << (match ? format("%.9g", l.cge_score) : "") << ','
+        << l.matched_points << ',' << (l.accepted ? 1 : 0) << ',' << l.reason << '\n';
+  }
+}
+
+void write_timings_csv(std::ostream& out, const std::vector<FrameRecord>& frames) {
+  out << "frame,timestamp";
+  for (int s = 0; s < kStageCount; ++s) out << ',' << to_string(static_cast<Stage>(s)) << "_ms";
+  out << '\n';
+  for (const FrameRecord& r : frames) {
+    out << r.index << ',' << format("%.6f", r.timestamp_s);
+    for (const double ms : r.times_ms) out << ',' << format("%.3f", ms);
+    out << '\n';
+  }
+}
+
+void write_frames_csv(std::ostream& out, const std::vector<FrameRecord>& frames) {
+  out << "frame,timestamp,state,keypoints,dynamic_by_mask,dynamic_by_mad,instances,matches,inliers,keyframe,"
+         "keyframe_rule\n";
+  for (const FrameRecord& r : frames) {
+    out << r.index << ',' << format("%.6f", r.timestamp_s) << ',' << to_string(r.state) << ',' << r.keypoints << ','
+        << r.dynamic_by_mask << ',' << r.dynamic_by_mad << ',' << r.instances << ',' << r.matches << ',' << r.inliers
+        << ',' << (r.keyframe_id >= 0 ? std::to_string(r.keyframe_id) : "") << ','
+        << (r.keyframe_id >= 0 ? r.keyframe_rule : "") << '\n';
+  }
+}
+
+}  // namespace slam
+}  // namespace cge

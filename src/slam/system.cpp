@@ -1,0 +1,252 @@
+#include "cge/slam/system.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <stdexcept>
+#include <string>
+
+#include "cge/opencv/keypoint.hpp"
+#include "cge/slam/loop_closer.hpp"
+
+namespace cge {
+namespace slam {
+
+const char* to_string(Stage stage) {
+  switch (stage) {
+    case Stage::segmentation:
+      return "segmentation";
+    case Stage::features:
+      return "features";
+    case Stage::dynamic_filter:
+      return "dynamic_filter";
+    case Stage::tracking:
+      return "tracking";
+    case Stage::keyframe:
+      return "keyframe";
+    case Stage::loop_closing:
+      return "loop_closing";
+    case Stage::optimisation:
+      return "optimisation";
+    case Stage::total:
+      return "total";
+  }
+  return "invalid";
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double elapsed_ms(Clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
+}
+
+double& time_of(FrameRecord& r, Stage s) { return r.times_ms[static_cast<std::size_t>(s)]; }
+
+}  // namespace
+
+System::System(const SystemSettings& settings, const PinholeIntrinsics<double>& intrinsics,
+               std::unique_ptr<InstanceSegmenter> segmenter)
+    : settings_(settings),
+      intrinsics_(intrinsics),
+      segmenter_(std::move(segmenter)),
+      frame_maker_(settings, intrinsics),
+      tracker_(settings.tracker, intrinsics, settings.frame.orb.scale_factor),
+      keyframe_policy_(keyframe_policy_of(settings.mode), settings.patch_keyframes, settings.orbslam2_keyframes) {}
+
+System::~System() = default;
+System::System(System&&) noexcept = default;
+System& System::operator=(System&&) noexcept = default;
+
+void System::set_loop_closer(std::unique_ptr<LoopCloser> loop_closer) {
+  if (map_.keyframe_count() > 0) throw std::logic_error("System::set_loop_closer: the map has keyframes already");
+  loop_closer_ = std::move(loop_closer);
+}
+
+const FrameRecord& System::process(const FrameInput& input) {
+  std::vector<SegmentedInstance> instances;
+  double segmentation_ms = 0;
+  if (uses_masks(settings_.mode) && segmenter_ != nullptr) {
+    const auto start = Clock::now();
+    instances = segmenter_->segment(FrameImage{input.bgr, input.stem});
+    segmentation_ms = elapsed_ms(start);
+  }
+  return process(input, instances, segmentation_ms);
+}
+
+const FrameRecord& System::process(const FrameInput& input, const std::vector<SegmentedInstance>& instances,
+                                   double segmentation_ms) {
+  const auto start = Clock::now();
+  if (!records_.empty() && input.index <= records_.back().index) {
+    throw std::invalid_argument("System::process: frame index " + std::to_string(input.index) +
+                                " is not greater than the previous " + std::to_string(records_.back().index));
+  }
+  FrameRecord record;
+  record.index = input.index;
+  record.timestamp_s = input.timestamp_s;
+  time_of(record, Stage::segmentation) = segmentation_ms;
+
+  auto t = Clock::now();
+  Frame frame = frame_maker_.extract(input.index, input.timestamp_s, input.bgr, input.depth);
+  time_of(record, Stage::features) = elapsed_ms(t);
+
+  t = Clock::now();
+  frame_maker_.label(frame, instances);
+  time_of(record, Stage::dynamic_filter) = elapsed_ms(t);
+  record.keypoints = frame.size();
+  record.dynamic_by_mask = frame.count(FeatureLabel::dynamic_by_mask);
+  record.dynamic_by_mad = frame.count(FeatureLabel::dynamic_by_mad);
+  record.instances = static_cast<int>(frame.instances.size());
+
+  t = Clock::now();
+  TrackResult track = tracker_.track(frame, map_);
+  time_of(record, Stage::tracking) = elapsed_ms(t);
+  record.state = track.state;
+  record.matches = track.matches;
+  record.inliers = track.inliers;
+  record.T_world_camera = track.T_world_camera;
+  records_.push_back(record);
+  const std::size_t index = records_.size() - 1;
+
+  t = Clock::now();
+  if (track.has_pose()) decide_keyframe(frame, track, index);
+  // Keyframe time excludes the loop closing and optimisation it triggered (timed on their own).
+  FrameRecord& r = records_[index];
+  if (r.has_pose() && tracker_.reference_keyframe() >= 0) {
+    r.reference_keyframe = tracker_.reference_keyframe();
+    r.T_reference_camera = map_.keyframe(r.reference_keyframe).T_world_camera.inverse() * r.T_world_camera;
+  }
+  time_of(r, Stage::keyframe) = elapsed_ms(t) - time_of(r, Stage::loop_closing) - time_of(r, Stage::optimisation);
+  time_of(r, Stage::total) = elapsed_ms(start) + segmentation_ms;
+  return r;
+}
+
+void System::decide_keyframe(Frame& frame, TrackResult& track, std::size_t record) {
+  if (track.state == TrackingState::initialised) {
+    keyframe_policy_.reset();
+    pending_.clear();
+  }
+  const PatchKeyframeSelector<double> grid_source(settings_.patch_keyframes);
+  std::vector<cv::KeyPoint> static_keypoints;
+  for (int i = 0; i < frame.size(); ++i) {
+    if (frame.is_static(i)) static_keypoints.push_back(frame.keypoints[static_cast<std::size_t>(i)]);
+  }
+  ImageRegion<double> image;
+  image.width_px = frame.image_size.width;
+  image.height_px = frame.image_size.height;
+  const FrameSummary<double> summary =
+      grid_source.summarise(frame.index, image, static_keypoints, frame.instances, track.inliers);
+  // The baseline compares with the reference keyframe's (well-observed) points, as they are now.
+  const int reference = tracker_.reference_keyframe();
+  if (keyframe_policy_.reference_id() != kNoFrame && reference >= 0) {
+    const int min_obs = map_.keyframe_count() <= 2 ? std::min(2, settings_.mapping.reference_min_observations)
+                                                   : settings_.mapping.reference_min_observations;
+    int well_observed = 0;
+    for (const std::int64_t p : map_.keyframe(reference).map_point_ids) {
+      well_observed += p >= 0 && static_cast<int>(map_.map_point(p).observations.size()) >= min_obs;
+    }
+    keyframe_policy_.set_reference_tracked_points(well_observed);
+  }
+  const KeyframeDecision<double> decision = keyframe_policy_.step(summary);
+  if (track.state == TrackingState::initialised && decision.keyframe_id != frame.index) {
+    throw std::logic_error("System: the keyframe policy did not take the first frame");
+  }
+  apply_decision(decision, &frame, &track, record);
+}
+
+void System::apply_decision(const KeyframeDecision<double>& decision, Frame* current, TrackResult* track,
+                            std::size_t record) {
+  if (decision.inserts_keyframe()) {
+    const char* rule = to_string(decision.rule);
+    if (current != nullptr && decision.keyframe_id == current->index) {
+      insert_keyframe(*current, *track, record, rule);
+    } else {
+      const auto it = std::find_if(pending_.begin(), pending_.end(),
+                                   [&](const Pending& p) { return p.frame.index == decision.keyframe_id; });
+      if (it == pending_.end()) {
+        throw std::logic_error("System: the keyframe policy chose frame " + std::to_string(decision.keyframe_id) +
+                               ", which is not pending");
+      }
+      insert_keyframe(it->frame, it->track, it->record, rule);
+    }
+  }
+  const std::vector<std::int64_t> keep = keyframe_policy_.pending_ids();
+  pending_.erase(std::remove_if(pending_.begin(), pending_.end(),
+                                [&](const Pending& p) {
+                                  return std::find(keep.begin(), keep.end(), p.frame.index) == keep.end();
+                                }),
+                 pending_.end());
+  if (current != nullptr && decision.keep_current) pending_.push_back(Pending{*current, *track, record});
+}
+
+int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::size_t record, const char* rule) {
+  Keyframe kf;
+  kf.frame_index = frame.index;
+  kf.timestamp_s = frame.timestamp_s;
+  kf.T_world_camera = track.T_world_camera;
+  kf.keypoints = frame.keypoints;
+  kf.descriptors = frame.descriptors.clone();
+  kf.labels = frame.labels;
+  kf.points_camera_m = frame.points_camera_m;
+  kf.instances = frame.instances;
+  kf.dynamic_mask = frame.dynamic_mask;
+  if (settings_.keep_keyframe_images) {
+    kf.bgr = frame.bgr.clone();
+    kf.depth_m = frame.depth_m;
+  }
+  const int id = map_.add_keyframe(std::move(kf));
+  for (int i = 0; i < frame.size(); ++i) {
+    const std::int64_t tracked = track.map_point_ids[static_cast<std::size_t>(i)];
+    if (tracked >= 0) {
+      map_.add_observation(tracked, id, i);
+    } else if (frame.is_static(i) && frame.has_depth(i)) {
+      const Eigen::Vector3d& p_camera = frame.points_camera_m[static_cast<std::size_t>(i)];
+      if (p_camera.z() >= settings_.mapping.max_new_point_depth_m) continue;
+      const std::int64_t point = map_.add_map_point(track.T_world_camera * p_camera, frame.descriptors.row(i));
+      map_.add_observation(point, id, i);
+    }
+  }
+  tracker_.set_reference_keyframe(id);
+  FrameRecord& r = records_[record];
+  r.keyframe_id = id;
+  r.keyframe_rule = rule;
+  after_keyframe_inserted(id);
+  return id;
+}
+
+void System::after_keyframe_inserted(int keyframe_id) {
+  // Loop closing (ALGORITHMS.md section 7): the closer reads map_ (a KeyframeDatabaseView) and
+  // its decision becomes a LoopRecord. The correction of an accepted loop (pose-graph
+  // optimisation, then bundle adjustment, through map_.set_keyframe_pose / set_map_point_position)
+  // belongs here too, timed as the optimisation stage.
+  if (loop_closer_ == nullptr) return;
+  const auto start = Clock::now();
+  const Keyframe& kf = map_.keyframe(keyframe_id);
+  const LoopDecision d = loop_closer_->process(kf, map_);
+  LoopRecord r;
+  r.query_keyframe = keyframe_id;
+  r.query_timestamp_s = kf.timestamp_s;
+  r.match_keyframe = d.match_keyframe;
+  if (d.match_keyframe >= 0) r.match_timestamp_s = map_.keyframe(d.match_keyframe).timestamp_s;
+  r.bow_score = d.bow_score;
+  r.cge_score = d.cge_score;
+  r.matched_points = d.matched_points;
+  r.accepted = d.accepted;
+  r.reason = to_string(d.reason);
+  loops_.push_back(std::move(r));
+  time_of(records_.back(), Stage::loop_closing) += elapsed_ms(start);
+}
+
+void System::finish() {
+  const KeyframeDecision<double> decision = keyframe_policy_.flush();
+  apply_decision(decision, nullptr, nullptr, 0);
+  pending_.clear();
+}
+
+Eigen::Isometry3d System::pose_of(const FrameRecord& record) const {
+  if (record.reference_keyframe < 0) return record.T_world_camera;
+  return map_.keyframe(record.reference_keyframe).T_world_camera * record.T_reference_camera;
+}
+
+}  // namespace slam
+}  // namespace cge

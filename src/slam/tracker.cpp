@@ -1,0 +1,334 @@
+#include "cge/slam/tracker.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+#include <utility>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/hal/hal.hpp>
+#include <opencv2/features2d.hpp>
+
+namespace cge {
+namespace slam {
+
+const char* to_string(TrackingState state) {
+  switch (state) {
+    case TrackingState::initialised:
+      return "initialised";
+    case TrackingState::tracked:
+      return "tracked";
+    case TrackingState::relocalised:
+      return "relocalised";
+    case TrackingState::lost:
+      return "lost";
+  }
+  return "invalid";
+}
+
+namespace {
+
+constexpr int kGridCellPx = 16;           // bucket size of the keypoint grid, pixels
+constexpr int kMinPnpPoints = 6;          // fewer correspondences cannot give a RANSAC pose
+constexpr double kMinPointDepthM = 0.05;  // map points closer to the camera are not projected
+
+/// The static keypoints of a frame bucketed by pixel, for window queries.
+class KeypointGrid {
+ public:
+  explicit KeypointGrid(const Frame& frame)
+      : cols_((frame.image_size.width + kGridCellPx - 1) / kGridCellPx),
+        rows_((frame.image_size.height + kGridCellPx - 1) / kGridCellPx),
+        cells_(static_cast<std::size_t>(cols_ * rows_)) {
+    for (int i = 0; i < frame.size(); ++i) {
+      if (!frame.is_static(i)) continue;
+      const cv::Point2f& p = frame.keypoints[static_cast<std::size_t>(i)].pt;
+      cells_[static_cast<std::size_t>(cell_row(p.y) * cols_ + cell_col(p.x))].push_back(i);
+    }
+  }
+
+  /// Calls f(i) for the static keypoints in cells overlapping the square window, by cell then index.
+  template <typename F>
+  void for_each_near(double u, double v, double radius, F&& f) const {
+    const int c0 = cell_col(u - radius), c1 = cell_col(u + radius);
+    const int r0 = cell_row(v - radius), r1 = cell_row(v + radius);
+    for (int r = r0; r <= r1; ++r) {
+      for (int c = c0; c <= c1; ++c) {
+        for (const int i : cells_[static_cast<std::size_t>(r * cols_ + c)]) f(i);
+      }
+    }
+  }
+
+ private:
+  int cell_col(double x) const { return std::clamp(static_cast<int>(std::floor(x / kGridCellPx)), 0, cols_ - 1); }
+  int cell_row(double y) const { return std::clamp(static_cast<int>(std::floor(y / kGridCellPx)), 0, rows_ - 1); }
+  int cols_, rows_;
+  std::vector<std::vector<int>> cells_;
+};
+
+int hamming(const cv::Mat& a, const cv::Mat& b, int row_b) {
+  return cv::hal::normHamming(a.ptr<std::uint8_t>(0), b.ptr<std::uint8_t>(row_b), a.cols);
+}
+
+Eigen::Isometry3d from_rvec_tvec(const cv::Mat& rvec, const cv::Mat& tvec) {
+  cv::Mat R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) T.linear()(r, c) = R.at<double>(r, c);
+    T.translation()(r) = tvec.at<double>(r);
+  }
+  return T;
+}
+
+}  // namespace
+
+struct Tracker::Attempt {
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
+  int matches = 0;
+  int inliers = 0;
+  std::vector<std::int64_t> map_point_ids;
+};
+
+Tracker::Tracker(const TrackerSettings& settings, const PinholeIntrinsics<double>& intrinsics, double orb_scale_factor)
+    : settings_(settings),
+      intrinsics_(intrinsics),
+      orb_scale_factor_(orb_scale_factor),
+      refiner_(settings.refinement) {}
+
+std::vector<std::int64_t> Tracker::local_map_points(const Map& map) const {
+  std::set<int> keyframes;
+  const int n = map.keyframe_count();
+  for (int id = std::max(0, n - settings_.local_recent_keyframes); id < n; ++id) keyframes.insert(id);
+  if (reference_keyframe_ >= 0 && reference_keyframe_ < n) {
+    keyframes.insert(reference_keyframe_);
+    for (const int id : map.covisible_keyframes(reference_keyframe_, settings_.local_covisible_keyframes)) {
+      keyframes.insert(id);
+    }
+  }
+  std::vector<std::int64_t> points;
+  for (const int id : keyframes) {
+    for (const std::int64_t p : map.keyframe(id).map_point_ids) {
+      if (p >= 0) points.push_back(p);
+    }
+  }
+  std::sort(points.begin(), points.end());
+  points.erase(std::unique(points.begin(), points.end()), points.end());
+  return points;
+}
+
+int Tracker::match_by_projection(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
+                                 const Eigen::Isometry3d& T_world_camera, double radius_px,
+                                 std::vector<std::int64_t>& matches) const {
+  const KeypointGrid grid(frame);
+  matches.assign(static_cast<std::size_t>(frame.size()), -1);
+  std::vector<int> best_distance(static_cast<std::size_t>(frame.size()), INT_MAX);
+  const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
+  const double width = frame.image_size.width, height = frame.image_size.height;
+  const double radius_sq = radius_px * radius_px;
+  for (const std::int64_t id : points) {
+    const MapPoint& mp = map.map_point(id);
+    const Eigen::Vector3d p_camera = T_camera_world * mp.position_world;
+    if (p_camera.z() < kMinPointDepthM) continue;
+    const Eigen::Vector2d uv = intrinsics_.project(p_camera);
+    if (!(uv.x() >= 0 && uv.x() < width && uv.y() >= 0 && uv.y() < height)) continue;
+    int best = INT_MAX, second = INT_MAX, best_index = -1;
+    grid.for_each_near(uv.x(), uv.y(), radius_px, [&](int i) {
+      const cv::Point2f& kp = frame.keypoints[static_cast<std::size_t>(i)].pt;
+      const double du = kp.x - uv.x(), dv = kp.y - uv.y();
+      if (du * du + dv * dv > radius_sq) return;
+      const int d = hamming(mp.descriptor, frame.descriptors, i);
+      if (d < best) {
+        second = best;
+        best = d;
+        best_index = i;
+      } else if (d < second) {
+        second = d;
+      }
+    });
+    if (best_index < 0 || best > settings_.max_hamming) continue;
+    if (second != INT_MAX && best >= settings_.ratio * second) continue;
+    auto& slot = best_distance[static_cast<std::size_t>(best_index)];
+    if (best < slot) {
+      slot = best;
+      matches[static_cast<std::size_t>(best_index)] = id;
+    }
+  }
+  return static_cast<int>(std::count_if(matches.begin(), matches.end(), [](std::int64_t m) { return m >= 0; }));
+}
+
+bool Tracker::ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches, int min_inliers,
+                          Eigen::Isometry3d& T_world_camera) const {
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    if (matches[i] < 0) continue;
+    const Eigen::Vector3d& X = map.map_point(matches[i]).position_world;
+    object.emplace_back(X.x(), X.y(), X.z());
+    image.emplace_back(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
+  }
+  if (static_cast<int>(object.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
+  const cv::Matx33d K(intrinsics_.fx_px, 0, intrinsics_.cx_px, 0, intrinsics_.fy_px, intrinsics_.cy_px, 0, 0, 1);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  // EPnP on minimal samples and, at the end, on all inliers (no iterative refinement here: the
+  // Ceres refinement follows).
+  const bool ok = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, settings_.pnp_iterations,
+                                     static_cast<float>(settings_.pnp_reprojection_px), settings_.pnp_confidence,
+                                     inliers, cv::SOLVEPNP_EPNP);
+  if (!ok || static_cast<int>(inliers.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
+  T_world_camera = from_rvec_tvec(rvec, tvec).inverse();
+  return T_world_camera.matrix().allFinite();
+}
+
+bool Tracker::refine_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches,
+                          const Eigen::Isometry3d& T_initial, int min_inliers, Attempt& out) const {
+  std::vector<PoseObservation> observations;
+  std::vector<int> keypoint_of;
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    if (matches[i] < 0) continue;
+    PoseObservation o;
+    o.point_world_m = map.map_point(matches[i]).position_world;
+    o.pixel_px = Eigen::Vector2d(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
+    o.sigma_px = std::pow(orb_scale_factor_, std::max(frame.keypoints[i].octave, 0));
+    observations.push_back(o);
+    keypoint_of.push_back(static_cast<int>(i));
+  }
+  out.matches = static_cast<int>(observations.size());
+  if (out.matches < std::max(kMinPnpPoints, min_inliers)) return false;
+  PoseRefinementResult refined;
+  try {
+    refined = refiner_.refine(intrinsics_, observations, T_initial);
+  } catch (const std::invalid_argument&) {
+    return false;  // too few points in front of the initial pose: a degenerate solution
+  }
+  out.T_world_camera = refined.T_world_camera;
+  out.inliers = refined.inlier_count;
+  out.map_point_ids.assign(matches.size(), -1);
+  for (std::size_t k = 0; k < observations.size(); ++k) {
+    if (!refined.inliers[k]) continue;
+    const auto i = static_cast<std::size_t>(keypoint_of[k]);
+    out.map_point_ids[i] = matches[i];
+  }
+  return out.inliers >= min_inliers;
+}
+
+bool Tracker::refine_with_local_map(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
+                                    const Eigen::Isometry3d& T_initial, Attempt& out) const {
+  std::vector<std::int64_t> matches;
+  match_by_projection(frame, map, points, T_initial, settings_.search_radius_px, matches);
+  return refine_pose(frame, map, matches, T_initial, settings_.min_inliers, out);
+}
+
+bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction,
+                              Attempt& out) const {
+  const std::vector<std::int64_t> points = local_map_points(map);
+  std::vector<std::int64_t> matches;
+  int found = match_by_projection(frame, map, points, prediction, settings_.search_radius_px, matches);
+  if (found < settings_.min_matches) {
+    found = match_by_projection(frame, map, points, prediction,
+                                settings_.search_radius_px * settings_.wide_search_factor, matches);
+  }
+  if (found < settings_.min_matches) return false;
+  // RANSAC on the matches of the prediction, then the matches of that pose refined (the second
+  // search finds the points the prediction missed).
+  Eigen::Isometry3d T_ransac;
+  if (!ransac_pose(frame, map, matches, settings_.min_inliers, T_ransac)) return false;
+  if ((T_ransac.translation() - prediction.translation()).norm() > settings_.max_jump_m) return false;
+  if (!refine_with_local_map(frame, map, points, T_ransac, out)) return false;
+  return (out.T_world_camera.translation() - prediction.translation()).norm() <= settings_.max_jump_m;
+}
+
+bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const {
+  std::vector<int> query_index;
+  for (int i = 0; i < frame.size(); ++i) {
+    if (frame.is_static(i)) query_index.push_back(i);
+  }
+  if (query_index.empty()) return false;
+  cv::Mat query(static_cast<int>(query_index.size()), frame.descriptors.cols, frame.descriptors.type());
+  for (std::size_t q = 0; q < query_index.size(); ++q)
+    frame.descriptors.row(query_index[q]).copyTo(query.row(static_cast<int>(q)));
+  cv::BFMatcher matcher(cv::NORM_HAMMING);
+  const int n = map.keyframe_count();
+  for (int id = n - 1; id >= std::max(0, n - settings_.relocalisation_keyframes); --id) {
+    const Keyframe& kf = map.keyframe(id);
+    std::vector<std::int64_t> train_point;
+    cv::Mat train;
+    for (std::size_t k = 0; k < kf.map_point_ids.size(); ++k) {
+      if (kf.map_point_ids[k] < 0) continue;
+      train.push_back(kf.descriptors.row(static_cast<int>(k)));
+      train_point.push_back(kf.map_point_ids[k]);
+    }
+    if (static_cast<int>(train_point.size()) < settings_.min_relocalisation_inliers) continue;
+    std::vector<std::vector<cv::DMatch>> knn;
+    matcher.knnMatch(query, train, knn, 2);
+    std::vector<std::int64_t> matches(static_cast<std::size_t>(frame.size()), -1);
+    std::vector<char> used(train_point.size(), 0);
+    for (const auto& m : knn) {
+      if (m.empty() || m[0].distance > static_cast<float>(settings_.max_hamming)) continue;
+      if (m.size() > 1 && m[0].distance >= settings_.ratio * m[1].distance) continue;
+      if (used[static_cast<std::size_t>(m[0].trainIdx)]) continue;
+      used[static_cast<std::size_t>(m[0].trainIdx)] = 1;
+      matches[static_cast<std::size_t>(query_index[static_cast<std::size_t>(m[0].queryIdx)])] =
+          train_point[static_cast<std::size_t>(m[0].trainIdx)];
+    }
+    Eigen::Isometry3d T_ransac;
+    if (!ransac_pose(frame, map, matches, settings_.min_relocalisation_inliers, T_ransac)) continue;
+    Attempt local;
+    if (!refine_with_local_map(frame, map, local_map_points(map), T_ransac, local)) continue;
+    if (local.inliers < settings_.min_relocalisation_inliers) continue;
+    out = std::move(local);
+    return true;
+  }
+  return false;
+}
+
+TrackResult Tracker::track(const Frame& frame, const Map& map) {
+  TrackResult result;
+  result.map_point_ids.assign(static_cast<std::size_t>(frame.size()), -1);
+  if (map.keyframe_count() == 0) {
+    int usable = 0;
+    for (int i = 0; i < frame.size(); ++i) usable += frame.is_static(i) && frame.has_depth(i);
+    if (usable < settings_.min_initial_points) return result;  // lost: not enough to start a map
+    result.state = TrackingState::initialised;
+    has_last_ = true;
+    T_world_last_ = Eigen::Isometry3d::Identity();
+    T_last_current_velocity_ = Eigen::Isometry3d::Identity();
+    return result;
+  }
+  const Eigen::Isometry3d prediction = T_world_last_ * T_last_current_velocity_;
+  Attempt attempt;
+  TrackingState state = TrackingState::tracked;
+  bool ok = track_local_map(frame, map, prediction, attempt);
+  if (!ok) {
+    ok = relocalise(frame, map, attempt);
+    state = TrackingState::relocalised;
+  }
+  if (!ok) {
+    T_last_current_velocity_ = Eigen::Isometry3d::Identity();  // the motion model is stale now
+    return result;
+  }
+  T_last_current_velocity_ = state == TrackingState::tracked ? T_world_last_.inverse() * attempt.T_world_camera
+                                                             : Eigen::Isometry3d::Identity();
+  T_world_last_ = attempt.T_world_camera;
+  result.state = state;
+  result.T_world_camera = attempt.T_world_camera;
+  result.matches = attempt.matches;
+  result.inliers = attempt.inliers;
+  result.map_point_ids = std::move(attempt.map_point_ids);
+
+  // The reference keyframe: the one observing most of the tracked points (ties: smaller id).
+  std::vector<int> votes(static_cast<std::size_t>(map.keyframe_count()), 0);
+  for (const std::int64_t p : result.map_point_ids) {
+    if (p < 0) continue;
+    for (const Observation& o : map.map_point(p).observations) ++votes[static_cast<std::size_t>(o.keyframe_id)];
+  }
+  const auto best = std::max_element(votes.begin(), votes.end());
+  if (best != votes.end() && *best > 0) reference_keyframe_ = static_cast<int>(best - votes.begin());
+  result.reference_keyframe = reference_keyframe_;
+  return result;
+}
+
+}  // namespace slam
+}  // namespace cge
