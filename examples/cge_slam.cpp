@@ -86,6 +86,7 @@ struct Options {
   std::uint64_t seed = 0;
   int frames = 0;  // 0: all (dataset) or kDefaultPresetFrames (rendered)
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
+  std::string loop_correction = "pgo+ba";  // none | pgo | pgo+ba
   std::string out;
   bool force = false;
 };
@@ -344,6 +345,8 @@ int run(Options opt) {
   }
   settings.seed = opt.seed;
   settings.mapping.reference_min_observations = opt.reference_min_observations;
+  settings.loop_correction.enabled = opt.loop_correction != "none";
+  settings.loop_correction.bundle_adjustment = opt.loop_correction == "pgo+ba";
   if (opt.frames < 0) throw UsageError("--frames must not be negative, got " + std::to_string(opt.frames));
   if (opt.out.empty()) throw UsageError("--out must name a folder");
   if (opt.segmentation.empty())
@@ -484,8 +487,11 @@ int main(int argc, char** argv) {
   app.add_option("--model", opt.model, "YOLOv8-seg ONNX model (--segmentation yolo)");
   app.add_option("--masks", opt.masks, "mask folder (--segmentation precomputed)");
   app.add_option("--settings", opt.settings, "ORB-SLAM2 TUM YAML settings (default: DATASET/camera.yaml)");
-  app.add_option("--vocabulary", opt.vocabulary,
-                 "bag-of-words vocabulary (cge_vocab) enabling loop closing; detections only, no correction yet");
+  app.add_option("--vocabulary", opt.vocabulary, "bag-of-words vocabulary (cge_vocab) enabling loop closing");
+  app.add_option("--loop-correction", opt.loop_correction,
+                 "what an accepted loop triggers: none (detect and log only), pgo (pose graph), pgo+ba (and global "
+                 "bundle adjustment)")
+      ->check(CLI::IsMember({"none", "pgo", "pgo+ba"}));
   app.add_option("--seed", opt.seed, "seed of the MAD samples (and of the rendered sequence)")->capture_default_str();
   app.add_option("--frames", opt.frames, "process at most this many frames (rendered: default 300)");
   app.add_option("--reference-min-observations", opt.reference_min_observations,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -235,6 +236,89 @@ void System::after_keyframe_inserted(int keyframe_id) {
   r.reason = to_string(d.reason);
   loops_.push_back(std::move(r));
   time_of(records_.back(), Stage::loop_closing) += elapsed_ms(start);
+
+  if (!d.accepted || !settings_.loop_correction.enabled) return;
+  loop_edges_.push_back(LoopEdge{d.match_keyframe, keyframe_id, d.T_match_query});
+  if (last_correction_keyframe_ >= 0 &&
+      keyframe_id - last_correction_keyframe_ <= settings_.loop_correction.min_keyframes_between) {
+    return;
+  }
+  const auto start_optimisation = Clock::now();
+  correct_loop(keyframe_id);
+  last_correction_keyframe_ = keyframe_id;
+  ++corrections_;
+  time_of(records_.back(), Stage::optimisation) += elapsed_ms(start_optimisation);
+}
+
+void System::correct_loop(int query_keyframe) {
+  const LoopCorrectionSettings& lc = settings_.loop_correction;
+  const int n = map_.keyframe_count();
+  std::vector<Eigen::Isometry3d> before(static_cast<std::size_t>(n));
+  for (int k = 0; k < n; ++k) before[static_cast<std::size_t>(k)] = map_.keyframe(k).T_world_camera;
+  const auto pose = [&](int k) -> const Eigen::Isometry3d& { return before[static_cast<std::size_t>(k)]; };
+
+  // Pose graph: relative poses as currently estimated (sequential, covisibility), plus the measured
+  // loop edges; keyframe 0 fixes the gauge.
+  std::vector<PoseGraphEdge> edges;
+  const auto add_edge = [&](int a, int b, const Eigen::Isometry3d& T_a_b) {
+    edges.push_back(PoseGraphEdge::weighted(a, b, T_a_b, lc.rotation_weight, lc.translation_weight));
+  };
+  for (int k = 1; k < n; ++k) add_edge(k - 1, k, pose(k - 1).inverse() * pose(k));
+  for (int a = 0; a < n; ++a) {
+    for (int b : map_.covisible_keyframes(a, -1)) {
+      if (b > a + 1 && map_.shared_points(a, b) >= lc.covisibility_min_shared_points) {
+        add_edge(a, b, pose(a).inverse() * pose(b));
+      }
+    }
+  }
+  for (const LoopEdge& e : loop_edges_) add_edge(e.match, e.query, e.T_match_query);
+  const PoseGraphResult graph = PoseGraphOptimiser{lc.pose_graph}.optimise(before, edges, {0});
+
+  // Map points follow their first keyframe's correction.
+  for (const MapPoint& p : map_.map_points()) {
+    if (p.observations.empty()) continue;
+    const auto k = static_cast<std::size_t>(p.observations.front().keyframe_id);
+    map_.set_map_point_position(p.id, graph.T_world_camera[k] * (before[k].inverse() * p.position_world));
+  }
+  for (int k = 0; k < n; ++k) map_.set_keyframe_pose(k, graph.T_world_camera[static_cast<std::size_t>(k)]);
+
+  if (lc.bundle_adjustment) {
+    // Global BA over every point seen by at least two keyframes; pixel + depth observations.
+    std::vector<Eigen::Vector3d> points;
+    std::vector<std::int64_t> point_ids;
+    std::vector<BundleObservation> observations;
+    for (const MapPoint& p : map_.map_points()) {
+      if (p.observations.size() < 2) continue;
+      const int index = static_cast<int>(points.size());
+      points.push_back(p.position_world);
+      point_ids.push_back(p.id);
+      for (const Observation& o : p.observations) {
+        const Keyframe& kf = map_.keyframe(o.keyframe_id);
+        const cv::KeyPoint& kp = kf.keypoints[static_cast<std::size_t>(o.keypoint_index)];
+        BundleObservation b;
+        b.keyframe = o.keyframe_id;
+        b.point = index;
+        b.pixel_px = Eigen::Vector2d(kp.pt.x, kp.pt.y);
+        b.sigma_px = std::pow(settings_.frame.orb.scale_factor, kp.octave);
+        const double z = kf.points_camera_m[static_cast<std::size_t>(o.keypoint_index)].z();
+        if (std::isfinite(z) && z > 0) {
+          b.depth_m = z;
+          b.sigma_depth_m = lc.depth_sigma_per_m * z * z;
+        }
+        observations.push_back(b);
+      }
+    }
+    if (!points.empty()) {
+      std::vector<Eigen::Isometry3d> poses(static_cast<std::size_t>(n));
+      for (int k = 0; k < n; ++k) poses[static_cast<std::size_t>(k)] = map_.keyframe(k).T_world_camera;
+      const BundleAdjustmentResult ba = BundleAdjuster{lc.bundle}.adjust(intrinsics_, poses, points, observations, {0});
+      for (int k = 0; k < n; ++k) map_.set_keyframe_pose(k, ba.T_world_camera[static_cast<std::size_t>(k)]);
+      for (std::size_t i = 0; i < point_ids.size(); ++i)
+        map_.set_map_point_position(point_ids[i], ba.points_world_m[i]);
+    }
+  }
+  const auto q = static_cast<std::size_t>(query_keyframe);
+  tracker_.apply_map_correction(map_.keyframe(query_keyframe).T_world_camera * before[q].inverse());
 }
 
 void System::finish() {

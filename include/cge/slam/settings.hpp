@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "cge/ceres/bundle_adjustment.hpp"
+#include "cge/ceres/pose_graph.hpp"
 #include "cge/ceres/pose_refinement.hpp"
 #include "cge/frontend/depth_mad_filter.hpp"
 #include "cge/frontend/keyframe_policy.hpp"
@@ -115,12 +117,33 @@ struct MappingSettings {
   int reference_min_observations = 1;
 };
 
+/// Correction of an accepted loop (ALGORITHMS.md section 7.5): a pose graph over all keyframes
+/// (sequential, covisibility and every accepted loop edge), map points moved with their first
+/// keyframe, then global bundle adjustment.
+struct LoopCorrectionSettings {
+  bool enabled = true;  ///< false: loops are only detected and logged (loops.csv), never corrected
+  /// After a correction, accepted loops within this many keyframes only add their edge to the
+  /// graph (one revisit is accepted at many consecutive keyframes), keyframes, >= 0.
+  int min_keyframes_between = 10;
+  /// Covisibility edges join keyframes sharing at least this many map points (ORB-SLAM2's
+  /// essential graph: 100), points, >= 1.
+  int covisibility_min_shared_points = 100;
+  double rotation_weight = 1e4;     ///< pose-graph edge information on rotation, 1/rad^2, > 0
+  double translation_weight = 1e4;  ///< pose-graph edge information on translation, 1/m^2, > 0
+  bool bundle_adjustment = true;    ///< global BA after the pose graph
+  /// Depth standard deviation in BA: sigma_z = depth_sigma_per_m * z^2 (Kinect-like growth), 1/m, > 0.
+  double depth_sigma_per_m = 0.003;
+  PoseGraphSettings pose_graph;
+  BundleAdjustmentSettings bundle;
+};
+
 /// Everything the System needs. Validate with validate(); throws std::invalid_argument naming a field.
 struct SystemSettings {
   DynamicMode mode = DynamicMode::YMK;
   FrameSettings frame;
   TrackerSettings tracker;
   MappingSettings mapping;
+  LoopCorrectionSettings loop_correction;
   PatchKeyframeSettings<double> patch_keyframes;        ///< mode YMK
   OrbSlam2KeyframeSettings<double> orbslam2_keyframes;  ///< modes none, Y, YM
   std::uint64_t seed = 0;             ///< the MAD filter's samples: frame i uses a seed derived from (seed, i)
@@ -154,6 +177,13 @@ struct SystemSettings {
     if (t.min_relocalisation_inliers < 4) fail("tracker.min_relocalisation_inliers must be at least 4");
     if (!(mapping.max_new_point_depth_m > 0)) fail("mapping.max_new_point_depth_m must be > 0");
     if (mapping.reference_min_observations < 1) fail("mapping.reference_min_observations must be at least 1");
+    const LoopCorrectionSettings& lc = loop_correction;
+    if (lc.min_keyframes_between < 0) fail("loop_correction.min_keyframes_between must not be negative");
+    if (lc.covisibility_min_shared_points < 1)
+      fail("loop_correction.covisibility_min_shared_points must be at least 1");
+    if (!(lc.rotation_weight > 0 && lc.translation_weight > 0)) fail("loop_correction weights must be > 0");
+    if (!(lc.depth_sigma_per_m > 0)) fail("loop_correction.depth_sigma_per_m must be > 0");
+    lc.bundle.validate();
     patch_keyframes.validate();
     orbslam2_keyframes.validate();
   }

@@ -121,6 +121,8 @@ class System {
   const std::vector<FrameRecord>& frames() const { return records_; }
   const Map& map() const { return map_; }
   const std::vector<LoopRecord>& loops() const { return loops_; }
+  /// Loop corrections applied (pose graph + bundle adjustment runs).
+  int loop_corrections() const { return corrections_; }
   /// The current pose estimate of a frame: its reference keyframe's current pose times the
   /// relative pose at tracking time (so optimisation of keyframes moves the whole trajectory).
   Eigen::Isometry3d pose_of(const FrameRecord& record) const;
@@ -138,6 +140,9 @@ class System {
   /// The loop closer appends its decision to loops_ and corrects poses through map_; timed as the
   /// loop_closing and optimisation stages of the current frame.
   void after_keyframe_inserted(int keyframe_id);
+  /// Pose graph over all keyframes (with every accepted loop edge so far), map points moved with
+  /// their first keyframe, then global BA (settings.loop_correction).
+  void correct_loop(int query_keyframe);
 
   SystemSettings settings_;
   PinholeIntrinsics<double> intrinsics_;
@@ -150,6 +155,13 @@ class System {
   std::vector<LoopRecord> loops_;
   std::deque<Pending> pending_;
   std::unique_ptr<LoopCloser> loop_closer_;
+  struct LoopEdge {
+    int match = -1, query = -1;
+    Eigen::Isometry3d T_match_query = Eigen::Isometry3d::Identity();
+  };
+  std::vector<LoopEdge> loop_edges_;  ///< every accepted loop, for all later pose graphs
+  int last_correction_keyframe_ = -1;
+  int corrections_ = 0;
 };
 
 }  // namespace slam

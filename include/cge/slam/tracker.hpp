@@ -63,6 +63,12 @@ class Tracker {
   void set_reference_keyframe(int keyframe_id) { reference_keyframe_ = keyframe_id; }
   int reference_keyframe() const { return reference_keyframe_; }
 
+  /// The map was corrected (loop closure): the last tracked pose moves with it, so the next
+  /// prediction lands in the corrected map. T_corrected_old maps old world coordinates to new ones.
+  void apply_map_correction(const Eigen::Isometry3d& T_corrected_old) {
+    T_world_last_ = T_corrected_old * T_world_last_;
+  }
+
   const TrackerSettings& settings() const { return settings_; }
 
  private:
