@@ -44,6 +44,7 @@
 #include "cge/dataset/segmentation_source.hpp"
 #include "cge/dataset/tum_sequence.hpp"
 #include "cge/metrics/ate.hpp"
+#include "cge/metrics/rpe.hpp"
 #include "cge/segmentation/coco_classes.hpp"
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
@@ -298,7 +299,8 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
   j["map_points"] = system.map().map_point_count();
   int accepted = 0;
   for (const auto& l : system.loops()) accepted += l.accepted;
-  j["loops"] = {{"candidates", system.loops().size()}, {"accepted", accepted}};
+  j["loops"] = {
+      {"candidates", system.loops().size()}, {"accepted", accepted}, {"corrections", system.loop_corrections()}};
   j["mode"] = cge::slam::to_string(system.settings().mode);
   j["segmentation"] = opt.segmentation;
   j["source"] = source;
@@ -328,6 +330,15 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
                   {"std_m", t.std},   {"min_m", t.min},   {"max_m", t.max}};
     } catch (const std::invalid_argument& e) {
       j["ate"] = {{"error", e.what()}};
+    }
+    try {  // RPE over 1 s, as cge_eval rpe's default
+      const cge::metrics::RpeResult rpe = cge::metrics::compute_rpe(gt, estimate);
+      j["rpe"] = {{"delta_s", cge::metrics::RpeSettings{}.delta},
+                  {"pairs", rpe.translation_m.count},
+                  {"translation_rmse_m", rpe.translation_m.rmse},
+                  {"rotation_rmse_deg", rpe.rotation_deg.rmse}};
+    } catch (const std::invalid_argument& e) {
+      j["rpe"] = {{"error", e.what()}};
     }
   }
   j["stages"] = stages;
@@ -460,6 +471,20 @@ int run(Options opt) {
   std::printf("%s: %d frames, %d tracked, %d lost, %d keyframes; wrote %s in %.1f s\n", kProgram, n,
               summary["tracked_frames"].get<int>(), summary["lost_frames"].get<int>(), system.map().keyframe_count(),
               opt.out.c_str(), elapsed_s());
+  // The evaluation as `name value` lines (the figures of summary.json a reader looks for first).
+  const auto print_line = [](const char* name, double value) { std::printf("%s %.6g\n", name, value); };
+  print_line("keyframes", system.map().keyframe_count());
+  print_line("loops_accepted", summary["loops"]["accepted"].get<double>());
+  print_line("loop_corrections", system.loop_corrections());
+  if (summary.contains("ate") && summary["ate"].contains("rmse_m")) {
+    print_line("ate_rmse_m", summary["ate"]["rmse_m"].get<double>());
+  }
+  if (summary.contains("rpe") && summary["rpe"].contains("translation_rmse_m")) {
+    print_line("rpe_translation_rmse_m", summary["rpe"]["translation_rmse_m"].get<double>());
+    print_line("rpe_rotation_rmse_deg", summary["rpe"]["rotation_rmse_deg"].get<double>());
+  }
+  print_line("tracking_median_ms", summary["stages"]["tracking"]["median_ms"].get<double>());
+  print_line("total_median_ms", summary["stages"]["total"]["median_ms"].get<double>());
   std::fflush(stdout);
   if (std::ferror(stdout)) {
     std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);
