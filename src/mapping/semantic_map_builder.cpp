@@ -13,6 +13,8 @@ namespace mapping {
 void check_settings(const SemanticMapSettings& s) {
   const auto bad = [](const std::string& what) { throw std::invalid_argument("SemanticMapSettings." + what); };
   if (s.pixel_stride < 1) bad("pixel_stride must be >= 1");
+  if (s.octree_pixel_stride < 1 || s.octree_pixel_stride % s.pixel_stride != 0)
+    bad("octree_pixel_stride must be a positive multiple of pixel_stride");
   if (!(s.max_range_m > 0 && std::isfinite(s.max_range_m))) bad("max_range_m must be finite and > 0");
   if (!(s.cloud_voxel_m > 0 && std::isfinite(s.cloud_voxel_m))) bad("cloud_voxel_m must be finite and > 0");
   if (s.min_entity_points < 1) bad("min_entity_points must be >= 1");
@@ -40,7 +42,7 @@ SemanticMapBuilder::SemanticMapBuilder(const PinholeIntrinsics<double>& intrinsi
   }
 }
 
-std::vector<SemanticPoint> SemanticMapBuilder::keyframe_points(const slam::Keyframe& kf) const {
+std::vector<SemanticPoint> SemanticMapBuilder::keyframe_points(const slam::Keyframe& kf, bool octree_grid) const {
   if (kf.depth_m.empty()) {
     throw std::invalid_argument("SemanticMapBuilder: keyframe " + std::to_string(kf.id) + " has no depth_m image");
   }
@@ -66,7 +68,7 @@ std::vector<SemanticPoint> SemanticMapBuilder::keyframe_points(const slam::Keyfr
   const float max_range = static_cast<float>(settings_.max_range_m);
 
   std::vector<SemanticPoint> points;
-  const int stride = settings_.pixel_stride;
+  const int stride = octree_grid ? settings_.octree_pixel_stride : settings_.pixel_stride;
   for (int v = 0; v < size.height; v += stride) {
     const float* depth = kf.depth_m.ptr<float>(v);
     const std::uint16_t* labels = has_labels ? kf.class_labels.ptr<std::uint16_t>(v) : nullptr;
@@ -103,8 +105,6 @@ void SemanticMapBuilder::insert(const slam::Keyframe& kf) {
   positions.reserve(points.size());
   labels.reserve(points.size());
   for (const SemanticPoint& p : points) {
-    positions.push_back(p.position_m);
-    labels.push_back(p.class_label);
     Rgb8 preset;
     if (!preset_colour_of_label(p.class_label, preset)) continue;  // the octree keeps no class for it
     const VoxelIndex i = voxel_of(p.position_m, settings_.octree.resolution_m);
@@ -122,6 +122,12 @@ void SemanticMapBuilder::insert(const slam::Keyframe& kf) {
     entities_.push_back(IntegrityEntity{b.first, b.second.lo, b.second.hi});
   }
 
+  positions.clear();
+  labels.clear();
+  for (const SemanticPoint& p : keyframe_points(kf, true)) {
+    positions.push_back(p.position_m);
+    labels.push_back(p.class_label);
+  }
   octree_.insert_scan(kf.T_world_camera.translation(), positions, labels);
   const std::vector<SemanticPoint> filtered = voxel_filter(points, settings_.cloud_voxel_m);
   filtered_points_.insert(filtered_points_.end(), filtered.begin(), filtered.end());

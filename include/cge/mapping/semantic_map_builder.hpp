@@ -31,7 +31,10 @@ namespace cge {
 namespace mapping {
 
 struct SemanticMapSettings {
-  int pixel_stride = 2;          ///< back-project every n-th pixel along rows and columns, >= 1
+  int pixel_stride = 2;  ///< cloud: back-project every n-th pixel along rows and columns, >= 1
+  /// Octree: cast rays to every n-th pixel only (a multiple of pixel_stride). A 5 cm voxel at 3 m
+  /// spans about 9 pixels, so 4 loses little and is 4 times cheaper than 2.
+  int octree_pixel_stride = 4;
   double max_range_m = 4.0;      ///< depth beyond this is not used (sensor noise grows with range), metres
   double cloud_voxel_m = 0.02;   ///< voxel filter of the dense cloud, metres, > 0
   bool use_dynamic_mask = true;  ///< leave out pixels of Keyframe::dynamic_mask (false: map everything)
@@ -68,8 +71,9 @@ class SemanticMapBuilder {
   void rebuild(const std::vector<slam::Keyframe>& keyframes);
   void clear();
 
-  /// The static points of one keyframe in world coordinates (before any voxel filter).
-  std::vector<SemanticPoint> keyframe_points(const slam::Keyframe& keyframe) const;
+  /// The static points of one keyframe in world coordinates (before any voxel filter), every
+  /// pixel_stride-th pixel; with `octree_grid` set, only those on the octree_pixel_stride grid.
+  std::vector<SemanticPoint> keyframe_points(const slam::Keyframe& keyframe, bool octree_grid = false) const;
 
   /// The dense cloud, voxel-filtered over all keyframes (cloud_voxel_m).
   std::vector<SemanticPoint> cloud() const;

@@ -22,14 +22,32 @@ namespace mapping {
 /// The filtered cloud (see above). Throws std::invalid_argument for voxel_m not finite and > 0 or
 /// a non-finite point.
 inline std::vector<SemanticPoint> voxel_filter(const std::vector<SemanticPoint>& points, double voxel_m) {
+  // Sorted by (voxel, input index): every voxel's points stay in input order. Voxel indices are
+  // ordered as voxel_less through one 64-bit key when they fit in 21 bits each (the usual case).
   std::vector<std::pair<VoxelIndex, std::size_t>> keyed;
   keyed.reserve(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) keyed.emplace_back(voxel_of(points[i].position_m, voxel_m), i);
-  // Stable on ties (the index breaks them), so every voxel's points stay in input order.
-  std::sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) {
-    if (a.first != b.first) return voxel_less(a.first, b.first);
-    return a.second < b.second;
-  });
+  bool packable = true;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    keyed.emplace_back(voxel_of(points[i].position_m, voxel_m), i);
+    packable = packable && (keyed.back().first.array().abs() < (1 << 20)).all();
+  }
+  if (packable) {
+    const auto pack = [](const VoxelIndex& v) {
+      const auto field = [](int c) { return static_cast<std::uint64_t>(c + (1 << 20)); };
+      return (field(v.x()) << 42) | (field(v.y()) << 21) | field(v.z());
+    };
+    std::vector<std::pair<std::uint64_t, std::size_t>> packed(keyed.size());
+    for (std::size_t i = 0; i < keyed.size(); ++i) packed[i] = {pack(keyed[i].first), i};
+    std::sort(packed.begin(), packed.end());
+    std::vector<std::pair<VoxelIndex, std::size_t>> sorted(keyed.size());
+    for (std::size_t i = 0; i < packed.size(); ++i) sorted[i] = keyed[packed[i].second];
+    keyed.swap(sorted);
+  } else {
+    std::sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) {
+      if (a.first != b.first) return voxel_less(a.first, b.first);
+      return a.second < b.second;
+    });
+  }
 
   std::vector<SemanticPoint> out;
   std::vector<std::pair<std::uint16_t, std::size_t>> labels;  // (label, index) of one voxel, sorted by label
