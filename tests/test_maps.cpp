@@ -541,3 +541,41 @@ TEST_CASE("Semantic map: rebuild follows moved poses", "[maps]") {
   CHECK(mean_after / static_cast<double>(after.size()) - mean_before / static_cast<double>(before.size()) ==
         Approx(1.0).margin(0.05));
 }
+
+TEST_CASE("SemanticOctree with one ray per end voxel equals OctoMap's own insertPointCloud", "[maps]") {
+  const Scene& s = scene();
+  cge::mapping::SemanticMapSettings settings;
+  cge::octomap_adapter::SemanticOctreeSettings os;
+  os.ray_block_voxels = 1;
+  os.max_range_m = 20;  // every point within range: both cast to the centre of its voxel
+  cge::octomap_adapter::SemanticOctree ours(os);
+  octomap::ColorOcTree oracle(os.resolution_m);
+  const cge::mapping::SemanticMapBuilder points_of(s.intrinsics, settings);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const std::vector<SemanticPoint> pts = points_of.keyframe_points(s.keyframes[k], true);
+    std::vector<Eigen::Vector3f> positions;
+    std::vector<std::uint16_t> labels;
+    octomap::Pointcloud cloud;
+    for (const SemanticPoint& p : pts) {
+      positions.push_back(p.position_m);
+      labels.push_back(p.class_label);
+      cloud.push_back(p.position_m.x(), p.position_m.y(), p.position_m.z());
+    }
+    const Eigen::Vector3d o = s.keyframes[k].T_world_camera.translation();
+    ours.insert_scan(o, positions, labels);
+    oracle.insertPointCloud(cloud, octomap::point3d(float(o.x()), float(o.y()), float(o.z())), os.max_range_m, true,
+                            true);
+  }
+  std::size_t leaves = 0;
+  const octomap::ColorOcTree& tree = ours.tree();
+  for (auto it = oracle.begin_leafs(); it != oracle.end_leafs(); ++it) {
+    ++leaves;
+    const octomap::ColorOcTreeNode* n = tree.search(it.getKey());
+    REQUIRE(n);
+    REQUIRE(n->getLogOdds() == it->getLogOdds());
+  }
+  std::size_t our_leaves = 0;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) ++our_leaves;
+  CHECK(our_leaves == leaves);
+  CHECK(leaves > 1000);
+}
