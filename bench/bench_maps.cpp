@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cge/mapping/semantic_map_builder.hpp"
+#include "cge/mapping/voxel_filter.hpp"
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
 
@@ -76,6 +77,22 @@ void BM_MapsRebuild(benchmark::State& state) {
   state.counters["occupied_voxels"] = static_cast<double>(builder.occupied_voxels().voxels.size());
 }
 BENCHMARK(BM_MapsRebuild)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond);
+
+/// The cloud's share of insert(): back-projection at stride 2 and the per-keyframe voxel filter.
+void BM_MapsCloudPart(benchmark::State& state) {
+  const Data& d = data();
+  const cge::mapping::SemanticMapBuilder builder(d.intrinsics);
+  for (auto _ : state) {
+    for (const cge::slam::Keyframe& kf : d.keyframes) {
+      benchmark::DoNotOptimize(
+          cge::mapping::voxel_filter(builder.keyframe_points(kf), builder.settings().cloud_voxel_m).size());
+    }
+  }
+  state.counters["s_per_keyframe"] =
+      benchmark::Counter(static_cast<double>(d.keyframes.size()),
+                         benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_MapsCloudPart)->Unit(benchmark::kMillisecond);
 
 /// The final products: the voxel-filtered cloud over all keyframes and the occupied voxels.
 void BM_MapsCloudAndVoxels(benchmark::State& state) {
