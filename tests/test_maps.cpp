@@ -579,3 +579,53 @@ TEST_CASE("SemanticOctree with one ray per end voxel equals OctoMap's own insert
   CHECK(our_leaves == leaves);
   CHECK(leaves > 1000);
 }
+
+TEST_CASE("Keyframe points: hand-worked back-projection, masks, range and colours", "[maps]") {
+  cge::PinholeIntrinsics<double> K;
+  K.fx_px = 2;
+  K.fy_px = 4;
+  K.cx_px = 0.5;
+  K.cy_px = 0.5;
+  cge::mapping::SemanticMapSettings settings;
+  settings.pixel_stride = 1;
+  settings.octree_pixel_stride = 1;
+  settings.max_range_m = 3;
+  cge::slam::Keyframe kf;
+  kf.T_world_camera = Eigen::Translation3d(1, 2, 3) * Eigen::AngleAxisd(std::acos(-1.0) / 2, Eigen::Vector3d::UnitZ());
+  // Pixels (u, v): (0,0) depth 1, chair; (1,0) depth 2, unlabelled; (0,1) depth 0 (invalid);
+  // (1,1) depth 1 but dynamic.
+  kf.depth_m = (cv::Mat_<float>(2, 2) << 1.f, 2.f, 0.f, 1.f);
+  kf.class_labels = (cv::Mat_<std::uint16_t>(2, 2) << 57, 0, 0, 1);
+  kf.dynamic_mask = (cv::Mat_<std::uint8_t>(2, 2) << 0, 0, 0, 255);
+  kf.bgr = cv::Mat(2, 2, CV_8UC3, cv::Scalar(10, 20, 30));
+  const cge::mapping::SemanticMapBuilder builder(K, settings);
+  const std::vector<SemanticPoint> pts = builder.keyframe_points(kf);
+  REQUIRE(pts.size() == 2);
+  // (0,0): camera ((0 - 0.5) * 1 / 2, (0 - 0.5) * 1 / 4, 1) = (-0.25, -0.125, 1); R_z(90): (x, y) -> (-y, x).
+  CHECK((pts[0].position_m - Eigen::Vector3f(1.125f, 1.75f, 4.f)).norm() < 1e-6f);
+  CHECK(pts[0].class_label == 57);
+  CHECK(pts[0].colour == Rgb8{255, 140, 0});  // chair's preset
+  // (1,0): camera ((1 - 0.5) * 2 / 2, (0 - 0.5) * 2 / 4, 2) = (0.5, -0.25, 2) -> (0.25, 0.5, 2) + t.
+  CHECK((pts[1].position_m - Eigen::Vector3f(1.25f, 2.5f, 5.f)).norm() < 1e-6f);
+  CHECK(pts[1].colour == cge::mapping::kOtherClassColour);
+  settings.colour_unlabelled_from_image = true;
+  settings.use_dynamic_mask = false;
+  settings.max_range_m = 1.5;  // drops the 2 m pixel
+  const std::vector<SemanticPoint> all = cge::mapping::SemanticMapBuilder(K, settings).keyframe_points(kf);
+  REQUIRE(all.size() == 2);
+  CHECK(all[1].class_label == 1);  // the dynamic pixel is in
+  CHECK(all[1].colour == Rgb8{220, 20, 60});
+  kf.class_labels.at<std::uint16_t>(1, 1) = 0;
+  CHECK(cge::mapping::SemanticMapBuilder(K, settings).keyframe_points(kf)[1].colour == Rgb8{30, 20, 10});  // BGR -> RGB
+
+  // The same points as a voxel map: one voxel each, label by majority (ties: the smaller label).
+  std::vector<SemanticPoint> cloud = {point(0.01f, 0.01f, 0.01f, 57, Rgb8{}), point(0.02f, 0.02f, 0.02f, 74, Rgb8{}),
+                                      point(0.03f, 0.01f, 0.01f, 74, Rgb8{}), point(0.11f, 0.01f, 0.01f, 57, Rgb8{}),
+                                      point(0.12f, 0.01f, 0.01f, 1, Rgb8{})};
+  const OccupiedVoxels v = cge::mapping::occupied_voxels_of_cloud(cloud, 0.1);
+  REQUIRE(v.voxels.size() == 2);
+  CHECK(v.voxels[0].index == VoxelIndex(0, 0, 0));
+  CHECK(v.voxels[0].class_label == 74);
+  CHECK(v.voxels[1].index == VoxelIndex(1, 0, 0));
+  CHECK(v.voxels[1].class_label == 1);  // 1 and 57 tie: the smaller
+}
