@@ -2,6 +2,7 @@
 //   cge_eval ate GT EST [--max-difference 0.02] [--offset 0]       absolute trajectory error
 //   cge_eval rpe GT EST [--delta 1] [--delta-unit s|frames]        relative pose error
 //   cge_eval loops GT_LOOPS LOOPS_CSV [--tolerance 0.001]          loop precision and recall
+//   cge_eval map MAP.ot [--sequence DIR] [--image PNG]             semantic octree scores (docs/MAPS.md)
 // GT and EST are TUM trajectories; ATE and RPE follow the TUM RGB-D benchmark tools.
 //
 // Output: one "name value" line per quantity on standard output (15 significant digits; "nan" for
@@ -26,6 +27,13 @@
 #include "cge/metrics/loop_queries_io.hpp"
 #include "cge/metrics/rpe.hpp"
 #include "cge/metrics/tum_trajectory_io.hpp"
+
+#ifdef CGE_EVAL_HAS_MAPS
+#include "cge/mapping/ghost_voxels.hpp"
+#include "cge/mapping/map_image.hpp"
+#include "cge/mapping/semantic_integrity.hpp"
+#include "cge/octomap/semantic_octree.hpp"
+#endif
 
 #ifndef CGE_VERSION_STRING
 #define CGE_VERSION_STRING "unknown"
@@ -57,6 +65,10 @@ struct Options {
   double delta = m::RpeSettings{}.delta;
   std::string delta_unit = "s";
   double tolerance_s = m::LoopEvaluationSettings{}.timestamp_tolerance_s;
+  std::string map_ot;
+  std::string map_sequence;
+  std::string map_image;
+  std::size_t min_entity_voxels = 3;
 };
 
 /// One result: a name and a number (NaN for undefined); counts print as JSON integers.
@@ -154,6 +166,34 @@ Values run_rpe(const Options& opt, nlohmann::ordered_json& inputs) {
   add_statistics(v, "rpe_rot_", "_deg", r.rotation_deg);
   return v;
 }
+
+#ifdef CGE_EVAL_HAS_MAPS
+Values run_map(const Options& opt, nlohmann::ordered_json& inputs) {
+  namespace mp = cge::mapping;
+  const auto tree = cge::octomap_adapter::read_color_octree(opt.map_ot);
+  inputs["map"] = opt.map_ot;
+  const mp::OccupiedVoxels voxels = cge::octomap_adapter::occupied_voxels(*tree);
+  const mp::IntegrityScores scores =
+      mp::integrity_scores(voxels, mp::component_entities(voxels, opt.min_entity_voxels));
+  Values v = {real("resolution_m", voxels.resolution_m),
+              count("occupied_voxels", voxels.voxels.size()),
+              count("entities", static_cast<std::size_t>(scores.entities)),
+              real("integrity", scores.integrity),
+              real("fluctuation", scores.fluctuation),
+              count("memory_bytes", tree->memoryUsage())};
+  if (!opt.map_sequence.empty()) {
+    inputs["sequence"] = opt.map_sequence;
+    const mp::GhostVoxels ghosts = mp::ghost_voxels_from_sequence(opt.map_sequence, voxels.resolution_m);
+    v.push_back(real("ghost_fraction", mp::ghost_fraction(voxels, ghosts)));
+    v.push_back(count("ghost_set_voxels", ghosts.ghost.size()));
+  }
+  if (!opt.map_image.empty()) {
+    inputs["image"] = opt.map_image;
+    mp::write_png(opt.map_image, mp::render_top_view(voxels));
+  }
+  return v;
+}
+#endif
 
 Values run_loops(const Options& opt, nlohmann::ordered_json& inputs) {
   if (!(std::isfinite(opt.tolerance_s) && opt.tolerance_s >= 0)) {
@@ -256,6 +296,19 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   add_common(loops);
 
+#ifdef CGE_EVAL_HAS_MAPS
+  CLI::App* map = app.add_subcommand("map", "semantic octree: occupied voxels, integrity, fluctuation, ghost voxels");
+  map->add_option("MAP", opt.map_ot, "the semantic octree (.ot, a ColorOcTree)")->required();
+  map->add_option(
+      "--sequence", opt.map_sequence,
+      "a synthetic sequence folder (cge_sim): also the fraction of occupied voxels on moving people's paths");
+  map->add_option("--image", opt.map_image, "write a top-view PNG of the occupied voxels (never overwritten)");
+  map->add_option("--min-entity-voxels", opt.min_entity_voxels,
+                  "smaller connected same-class parts are not integrity entities")
+      ->capture_default_str();
+  add_common(map);
+#endif
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -275,6 +328,12 @@ int main(int argc, char** argv) {
       const Values v = run_rpe(opt, inputs);
       return print("rpe", v, inputs, opt.json);
     }
+#ifdef CGE_EVAL_HAS_MAPS
+    if (map->parsed()) {
+      const Values v = run_map(opt, inputs);
+      return print("map", v, inputs, opt.json);
+    }
+#endif
     const Values v = run_loops(opt, inputs);
     return print("loops", v, inputs, opt.json);
   } catch (const std::invalid_argument& e) {  // malformed input (file:line) or unusable data

@@ -108,3 +108,17 @@ if(EXISTS "${ev_tum}/freiburg1_xyz-rgbdslam.txt" AND EXISTS "${ev_tum}/freiburg1
 else()
   message(STATUS "cge: ${ev_tum} is absent, the cge_eval tests on real TUM files are skipped")
 endif()
+
+# map (only when cge_eval has the pipeline): eval/map3.ot is a ColorOcTree of resolution 0.1 m written
+# by OctoMap 1.9.7 with three occupied voxels: chair orange (255,140,0) at indices (0,0,0) and (1,1,0),
+# grey at (1,0,0). One 26-connected chair component whose box (0..1, 0..1, 0) holds all three voxels:
+# S_int = 2/3 for its single entity, fluctuation 0; with the default --min-entity-voxels 3 no entity.
+# eval/map3.bt is an OcTree (.bt), which the map subcommand refuses.
+if(TARGET cge_pipeline)
+  cge_cli_test(eval_map PROGRAM cge_eval ARGS map eval/map3.ot --min-entity-voxels 1
+    STDOUT "resolution_m 0\\.1" "occupied_voxels 3" "entities 1" "integrity 0\\.66666666666666[67]" "fluctuation 0")
+  cge_cli_test(eval_map_small_components PROGRAM cge_eval ARGS map eval/map3.ot
+    STDOUT "occupied_voxels 3" "entities 0" "integrity 0")
+  cge_cli_test(eval_map_bt PROGRAM cge_eval EXIT 2 ARGS map eval/map3.bt STDERR "is not an OctoMap \\.ot file")
+  cge_cli_test(eval_map_missing PROGRAM cge_eval EXIT 2 ARGS map eval/no_such_map.ot STDERR "is not a readable file")
+endif()

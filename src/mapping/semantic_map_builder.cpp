@@ -1,0 +1,184 @@
+#include "cge/mapping/semantic_map_builder.hpp"
+
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include "cge/mapping/ply_writer.hpp"
+#include "cge/mapping/voxel_filter.hpp"
+
+namespace cge {
+namespace mapping {
+
+void check_settings(const SemanticMapSettings& s) {
+  const auto bad = [](const std::string& what) { throw std::invalid_argument("SemanticMapSettings." + what); };
+  if (s.pixel_stride < 1) bad("pixel_stride must be >= 1");
+  if (s.octree_pixel_stride < 1 || s.octree_pixel_stride % s.pixel_stride != 0)
+    bad("octree_pixel_stride must be a positive multiple of pixel_stride");
+  if (!(s.max_range_m > 0 && std::isfinite(s.max_range_m))) bad("max_range_m must be finite and > 0");
+  if (!(s.cloud_voxel_m > 0 && std::isfinite(s.cloud_voxel_m))) bad("cloud_voxel_m must be finite and > 0");
+  if (s.min_entity_points < 1) bad("min_entity_points must be >= 1");
+  octomap_adapter::check_settings(s.octree);
+}
+
+namespace {
+
+void check_image(const cv::Mat& m, int type, const cv::Size& size, const slam::Keyframe& kf, const char* name) {
+  if (m.type() != type || m.size() != size) {
+    throw std::invalid_argument("SemanticMapBuilder: keyframe " + std::to_string(kf.id) + ": " + name + " must be " +
+                                std::to_string(size.width) + " x " + std::to_string(size.height) + " of type " +
+                                std::to_string(type) + " (got " + std::to_string(m.cols) + " x " +
+                                std::to_string(m.rows) + " of type " + std::to_string(m.type()) + ")");
+  }
+}
+
+}  // namespace
+
+SemanticMapBuilder::SemanticMapBuilder(const PinholeIntrinsics<double>& intrinsics, const SemanticMapSettings& settings)
+    : intrinsics_(intrinsics), settings_(settings), octree_((check_settings(settings), settings.octree)) {
+  if (!(std::isfinite(intrinsics.fx_px) && intrinsics.fx_px > 0 && std::isfinite(intrinsics.fy_px) &&
+        intrinsics.fy_px > 0 && std::isfinite(intrinsics.cx_px) && std::isfinite(intrinsics.cy_px))) {
+    throw std::invalid_argument("SemanticMapBuilder: intrinsics must be finite with fx, fy > 0");
+  }
+}
+
+std::vector<SemanticPoint> SemanticMapBuilder::keyframe_points(const slam::Keyframe& kf, bool octree_grid) const {
+  if (kf.depth_m.empty()) {
+    throw std::invalid_argument("SemanticMapBuilder: keyframe " + std::to_string(kf.id) + " has no depth_m image");
+  }
+  const cv::Size size = kf.depth_m.size();
+  check_image(kf.depth_m, CV_32FC1, size, kf, "depth_m");
+  const bool has_labels = !kf.class_labels.empty();
+  const bool has_mask = settings_.use_dynamic_mask && !kf.dynamic_mask.empty();
+  const bool has_bgr = !kf.bgr.empty();
+  if (has_labels) check_image(kf.class_labels, CV_16UC1, size, kf, "class_labels");
+  if (has_mask) check_image(kf.dynamic_mask, CV_8UC1, size, kf, "dynamic_mask");
+  if (has_bgr) check_image(kf.bgr, CV_8UC3, size, kf, "bgr");
+  if (settings_.colour_unlabelled_from_image && !has_bgr) {
+    throw std::invalid_argument("SemanticMapBuilder: keyframe " + std::to_string(kf.id) +
+                                " has no bgr image but colour_unlabelled_from_image is set");
+  }
+  if (!kf.T_world_camera.matrix().allFinite()) {
+    throw std::invalid_argument("SemanticMapBuilder: keyframe " + std::to_string(kf.id) + " pose is not finite");
+  }
+  const Eigen::Matrix3f R = kf.T_world_camera.linear().cast<float>();
+  const Eigen::Vector3f t = kf.T_world_camera.translation().cast<float>();
+  const float fx = static_cast<float>(intrinsics_.fx_px), fy = static_cast<float>(intrinsics_.fy_px);
+  const float cx = static_cast<float>(intrinsics_.cx_px), cy = static_cast<float>(intrinsics_.cy_px);
+  const float max_range = static_cast<float>(settings_.max_range_m);
+
+  std::vector<SemanticPoint> points;
+  const int stride = octree_grid ? settings_.octree_pixel_stride : settings_.pixel_stride;
+  for (int v = 0; v < size.height; v += stride) {
+    const float* depth = kf.depth_m.ptr<float>(v);
+    const std::uint16_t* labels = has_labels ? kf.class_labels.ptr<std::uint16_t>(v) : nullptr;
+    const std::uint8_t* mask = has_mask ? kf.dynamic_mask.ptr<std::uint8_t>(v) : nullptr;
+    const cv::Vec3b* bgr = has_bgr ? kf.bgr.ptr<cv::Vec3b>(v) : nullptr;
+    for (int u = 0; u < size.width; u += stride) {
+      const float z = depth[u];
+      if (!(z > 0 && z <= max_range)) continue;  // also drops NaN
+      if (mask && mask[u] != 0) continue;
+      const Eigen::Vector3f p_camera((static_cast<float>(u) - cx) * z / fx, (static_cast<float>(v) - cy) * z / fy, z);
+      SemanticPoint p;
+      p.position_m = R * p_camera + t;
+      p.class_label = labels ? labels[u] : std::uint16_t(0);
+      if (!preset_colour_of_label(p.class_label, p.colour)) {
+        p.colour = settings_.colour_unlabelled_from_image ? Rgb8{bgr[u][2], bgr[u][1], bgr[u][0]} : kOtherClassColour;
+      }
+      points.push_back(p);
+    }
+  }
+  return points;
+}
+
+void SemanticMapBuilder::insert(const slam::Keyframe& kf) {
+  const std::vector<SemanticPoint> points = keyframe_points(kf);
+
+  // Entities: per class label present, the voxel box (octree resolution) of its points.
+  struct Box {
+    VoxelIndex lo, hi;
+    int count = 0;
+  };
+  std::map<std::uint16_t, Box> boxes;
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<std::uint16_t> labels;
+  positions.reserve(points.size());
+  labels.reserve(points.size());
+  for (const SemanticPoint& p : points) {
+    Rgb8 preset;
+    if (!preset_colour_of_label(p.class_label, preset)) continue;  // the octree keeps no class for it
+    const VoxelIndex i = voxel_of(p.position_m, settings_.octree.resolution_m);
+    auto it = boxes.find(p.class_label);
+    if (it == boxes.end()) {
+      boxes[p.class_label] = Box{i, i, 1};
+    } else {
+      it->second.lo = it->second.lo.cwiseMin(i);
+      it->second.hi = it->second.hi.cwiseMax(i);
+      ++it->second.count;
+    }
+  }
+  for (const auto& b : boxes) {
+    if (b.second.count < settings_.min_entity_points) continue;
+    entities_.push_back(IntegrityEntity{b.first, b.second.lo, b.second.hi});
+  }
+
+  positions.clear();
+  labels.clear();
+  for (const SemanticPoint& p : keyframe_points(kf, true)) {
+    positions.push_back(p.position_m);
+    labels.push_back(p.class_label);
+  }
+  octree_.insert_scan(kf.T_world_camera.translation(), positions, labels);
+  const std::vector<SemanticPoint> filtered = voxel_filter(points, settings_.cloud_voxel_m);
+  filtered_points_.insert(filtered_points_.end(), filtered.begin(), filtered.end());
+  ++keyframes_;
+}
+
+void SemanticMapBuilder::clear() {
+  octree_.clear();
+  filtered_points_.clear();
+  entities_.clear();
+  keyframes_ = 0;
+}
+
+void SemanticMapBuilder::rebuild(const std::vector<slam::Keyframe>& keyframes) {
+  clear();
+  for (const slam::Keyframe& kf : keyframes) insert(kf);
+}
+
+std::vector<SemanticPoint> SemanticMapBuilder::cloud() const {
+  return voxel_filter(filtered_points_, settings_.cloud_voxel_m);
+}
+
+void SemanticMapBuilder::write_ply(const std::filesystem::path& path, bool overwrite) const {
+  mapping::write_ply(path, cloud(), overwrite);
+}
+
+void SemanticMapBuilder::write_octree(const std::filesystem::path& path_ot, const std::filesystem::path& path_bt,
+                                      bool overwrite) {
+  // Check both before writing either, so a refusal leaves nothing half done.
+  if (!overwrite && (std::filesystem::exists(path_ot) || std::filesystem::exists(path_bt))) {
+    throw std::invalid_argument(
+        "SemanticMapBuilder::write_octree: " + (std::filesystem::exists(path_ot) ? path_ot : path_bt).string() +
+        " exists (not overwritten)");
+  }
+  octree_.write_ot(path_ot, overwrite);
+  octree_.write_bt(path_bt, overwrite);
+}
+
+MapFigures SemanticMapBuilder::scores() const {
+  MapFigures f;
+  f.keyframes = keyframes_;
+  f.cloud_points = cloud().size();
+  const OccupiedVoxels voxels = occupied_voxels();
+  f.occupied_voxels = voxels.voxels.size();
+  const IntegrityScores s = integrity_scores(voxels, entities_);
+  f.integrity = s.integrity;
+  f.fluctuation = s.fluctuation;
+  f.entities = s.entities;
+  f.octree_memory_bytes = octree_.memory_bytes();
+  return f;
+}
+
+}  // namespace mapping
+}  // namespace cge
