@@ -43,6 +43,8 @@
 #include "cge/dataset/orbslam2_settings.hpp"
 #include "cge/dataset/segmentation_source.hpp"
 #include "cge/dataset/tum_sequence.hpp"
+#include "cge/mapping/map_image.hpp"
+#include "cge/mapping/semantic_map_builder.hpp"
 #include "cge/metrics/ate.hpp"
 #include "cge/metrics/rpe.hpp"
 #include "cge/segmentation/coco_classes.hpp"
@@ -88,6 +90,7 @@ struct Options {
   int frames = 0;  // 0: all (dataset) or kDefaultPresetFrames (rendered)
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   std::string loop_correction = "pgo+ba";  // none | pgo | pgo+ba
+  bool map = false;                        // write map.ply, map.ot, map.bt, map_top.png
   std::string out;
   bool force = false;
 };
@@ -153,6 +156,13 @@ class OutputFolder {
     file.flush();
     if (!file) throw std::runtime_error("cannot write " + path.string());
     names_.push_back(name);
+  }
+
+  /// A path in the staging folder for a writer that takes a file name (the map files); moved into
+  /// `out` on commit() like the others.
+  fs::path stage(const std::string& name) {
+    names_.push_back(name);
+    return staging_ / name;
   }
 
   void commit() {
@@ -356,6 +366,7 @@ int run(Options opt) {
   }
   settings.seed = opt.seed;
   settings.mapping.reference_min_observations = opt.reference_min_observations;
+  settings.keep_keyframe_images = opt.map;
   settings.loop_correction.enabled = opt.loop_correction != "none";
   settings.loop_correction.bundle_adjustment = opt.loop_correction == "pgo+ba";
   if (opt.frames < 0) throw UsageError("--frames must not be negative, got " + std::to_string(opt.frames));
@@ -458,7 +469,23 @@ int run(Options opt) {
   out.write("frames.csv", [&](std::ostream& f) { cge::slam::write_frames_csv(f, system.frames()); });
   out.write("timings.csv", [&](std::ostream& f) { cge::slam::write_timings_csv(f, system.frames()); });
   const auto gt = source->ground_truth();
-  const nlohmann::ordered_json summary = make_summary(system, opt, source_name, gt);
+  nlohmann::ordered_json summary = make_summary(system, opt, source_name, gt);
+  if (opt.map) {
+    // Semantic maps from the final (optimised) keyframes: dense cloud, octree, top view, scores.
+    cge::mapping::SemanticMapBuilder map(intrinsics);
+    map.rebuild(system.map().keyframes());
+    map.write_ply(out.stage("map.ply"));
+    map.write_octree(out.stage("map.ot"), out.stage("map.bt"));
+    cge::mapping::write_png(out.stage("map_top.png"), cge::mapping::render_top_view(map.occupied_voxels()));
+    const cge::mapping::MapFigures f = map.scores();
+    summary["map"] = {{"keyframes", f.keyframes},
+                      {"cloud_points", f.cloud_points},
+                      {"occupied_voxels", f.occupied_voxels},
+                      {"integrity", f.integrity},
+                      {"fluctuation", f.fluctuation},
+                      {"entities", f.entities},
+                      {"octree_memory_bytes", f.octree_memory_bytes}};
+  }
   out.write("summary.json", [&](std::ostream& f) { f << summary.dump(2) << '\n'; });
   if (opt.dataset.empty() && !gt.empty()) {
     out.write("groundtruth.txt", [&](std::ostream& f) {
@@ -524,6 +551,9 @@ int main(int argc, char** argv) {
                  "keyframes (ORB-SLAM2's nMinObs)")
       ->capture_default_str();
   app.add_option("--out", opt.out, "output folder; must not exist or be empty, unless --force")->required();
+  app.add_flag("--map", opt.map,
+               "also build the semantic maps from the keyframes: map.ply (dense cloud), map.ot/map.bt (octree), "
+               "map_top.png; their figures go to summary.json (docs/MAPS.md)");
   app.add_flag("--force", opt.force, "write into a non-empty folder: replace cge_slam's own files, delete nothing");
 
   try {

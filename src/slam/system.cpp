@@ -94,6 +94,13 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
   t = Clock::now();
   frame_maker_.label(frame, instances);
   time_of(record, Stage::dynamic_filter) = elapsed_ms(t);
+  if (settings_.keep_keyframe_images) {
+    // Class image for the semantic maps; later instances overwrite earlier ones where masks overlap.
+    frame.class_labels = cv::Mat::zeros(input.bgr.size(), CV_16UC1);
+    for (const SegmentedInstance& instance : instances) {
+      frame.class_labels.setTo(cv::Scalar(instance.class_id + 1), instance.mask);
+    }
+  }
   record.keypoints = frame.size();
   record.dynamic_by_mask = frame.count(FeatureLabel::dynamic_by_mask);
   record.dynamic_by_mad = frame.count(FeatureLabel::dynamic_by_mad);
@@ -194,6 +201,7 @@ int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::s
   if (settings_.keep_keyframe_images) {
     kf.bgr = frame.bgr.clone();
     kf.depth_m = frame.depth_m;
+    kf.class_labels = frame.class_labels;
   }
   const int id = map_.add_keyframe(std::move(kf));
   for (int i = 0; i < frame.size(); ++i) {

@@ -34,6 +34,9 @@ struct Frame {
 
   cv::Mat bgr;      ///< the colour image (shared with the caller's Mat, not copied)
   cv::Mat depth_m;  ///< CV_32FC1 metres, 0 where invalid
+  /// CV_16UC1 class id + 1 of the instance covering each pixel, 0 = none; only filled when the
+  /// System keeps keyframe images (for the semantic maps).
+  cv::Mat class_labels;
 
   int size() const { return static_cast<int>(keypoints.size()); }
   bool has_depth(int i) const { return std::isfinite(points_camera_m[static_cast<std::size_t>(i)].z()); }
