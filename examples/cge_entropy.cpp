@@ -27,6 +27,8 @@
 #include "cge/graph/graph_builder.hpp"
 #include "cge/io/graph_text.hpp"
 
+#include "tool_support.hpp"
+
 #ifndef CGE_VERSION_STRING
 #define CGE_VERSION_STRING "unknown"
 #endif
@@ -157,11 +159,7 @@ int run(const Options& opt) {
   print_value("max_entropy_bits", r.max_entropy_bits);
   print_value("information_index", r.information_index);
   if (g.weighted()) print_value("edge_entropy_bits", cge::ShannonEdgeEntropy<double>().compute(g));
-  std::fflush(stdout);
-  if (std::ferror(stdout)) {
-    std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);
-    return kExitComputation;
-  }
+  if (!cge_tool::standard_output_written(kProgram)) return kExitComputation;
   return kExitOk;
 }
 

@@ -33,6 +33,8 @@
 #include "cge/mapping/map_image.hpp"
 #include "cge/mapping/semantic_integrity.hpp"
 #include "cge/octomap/semantic_octree.hpp"
+
+#include "tool_support.hpp"
 #endif
 
 #ifndef CGE_VERSION_STRING
@@ -243,11 +245,7 @@ int print(const std::string& command, const Values& values, const nlohmann::orde
   } else {
     for (const Value& v : values) std::cout << v.name << ' ' << number(v.value) << '\n';
   }
-  std::cout.flush();
-  if (!std::cout) {
-    std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);
-    return kExitOutput;
-  }
+  if (!cge_tool::standard_output_written(kProgram)) return kExitOutput;
   return kExitOk;
 }
 

@@ -42,6 +42,8 @@
 #include "cge/segmentation/precomputed_mask_reader.hpp"
 #include "cge/segmentation/yolov8_segmenter.hpp"
 
+#include "tool_support.hpp"
+
 #ifndef CGE_VERSION_STRING
 #define CGE_VERSION_STRING "unknown"
 #endif
@@ -418,11 +420,7 @@ int run(const Options& opt) {
   if (!opt.out_image.empty()) out["out_image"] = opt.out_image;
 
   std::cout << out.dump(2) << '\n';
-  std::cout.flush();
-  if (!std::cout) {
-    std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);
-    return kExitFailure;
-  }
+  if (!cge_tool::standard_output_written(kProgram)) return kExitFailure;
   return kExitOk;
 }
 

@@ -31,6 +31,8 @@
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
 
+#include "tool_support.hpp"
+
 #ifndef CGE_VERSION_STRING
 #define CGE_VERSION_STRING "unknown"
 #endif
@@ -41,12 +43,11 @@ constexpr int kExitOk = 0;
 constexpr int kExitFailure = 1;
 constexpr int kExitUsage = 2;
 constexpr const char* kProgram = "cge_sim";
-constexpr int kProgressBarWidth = 40;  // characters between the brackets
 // Frames encoded at the same time while the next one renders: two keep two cores busy when the
 // renderer takes less time than an encoding; each frame in flight holds ~3 MB.
 constexpr int kFramesInFlight = 2;
 
-bool progress_line_open = false;  // a progress bar is on the terminal without its newline yet
+cge_tool::ProgressBar progress_bar{kProgram};  // drawn only on a terminal
 
 /// A bad input or flag value, reported on stderr with exit code 2.
 struct UsageError : std::runtime_error {
@@ -104,16 +105,6 @@ std::vector<int> parse_classes(const std::string& list, bool& all) {
 }
 
 /// "[=====>     ]  12/300 frames" on one terminal line, redrawn in place.
-void draw_progress(int done, int total, double elapsed_s) {
-  const int filled = static_cast<int>(static_cast<long long>(kProgressBarWidth) * done / total);
-  std::string bar(static_cast<std::size_t>(kProgressBarWidth), ' ');
-  std::fill(bar.begin(), bar.begin() + filled, '=');
-  if (filled < kProgressBarWidth) bar[static_cast<std::size_t>(filled)] = '>';
-  std::fprintf(stderr, "\r%s: [%s] %d/%d frames  %.1f s", kProgram, bar.c_str(), done, total, elapsed_s);
-  progress_line_open = done < total;
-  if (!progress_line_open) std::fputc('\n', stderr);
-  std::fflush(stderr);
-}
 
 /// cge::sim::write_tum_sequence with the PNG encoding, most of a frame's time, on other threads:
 /// this thread renders frame i while up to kFramesInFlight earlier frames are being encoded, and
@@ -173,16 +164,12 @@ int run(Options opt) {
   const std::unique_ptr<cge::sim::FrameSource> source = open_preset(opt.preset, opt.frames, opt.seed);
   const cge::sim::SegmentationErrorModel model(source->instances(), opt.seed, opt.errors);
   cge::sim::WriteProgress progress;
-  if (::isatty(::fileno(stderr))) progress = [&](int done, int total) { draw_progress(done, total, elapsed_s()); };
+  if (::isatty(::fileno(stderr))) progress = [&](int done, int total) { progress_bar.draw(done, total, elapsed_s()); };
   write_overlapped(*source, model, opt.out, opt.writer, progress);
 
   std::printf("wrote %d frames of %s (seed %llu) to %s in %.1f s\n", source->frame_count(), opt.preset.c_str(),
               static_cast<unsigned long long>(opt.seed), opt.out.c_str(), elapsed_s());
-  std::fflush(stdout);
-  if (std::ferror(stdout)) {
-    std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);
-    return kExitFailure;
-  }
+  if (!cge_tool::standard_output_written(kProgram)) return kExitFailure;
   return kExitOk;
 }
 
@@ -250,20 +237,17 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
 
-  const auto end_progress_line = [] {
-    if (progress_line_open) std::fputc('\n', stderr);
-  };
   try {
     return run(opt);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
     return kExitUsage;
   } catch (const std::invalid_argument& e) {
-    end_progress_line();
+    progress_bar.end_line();
     std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
     return kExitUsage;
   } catch (const std::exception& e) {
-    end_progress_line();
+    progress_bar.end_line();
     std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
     return kExitFailure;
   }

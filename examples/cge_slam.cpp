@@ -56,6 +56,8 @@
 #include "cge/slam/output_files.hpp"
 #include "cge/slam/system.hpp"
 
+#include "tool_support.hpp"
+
 #ifndef CGE_VERSION_STRING
 #define CGE_VERSION_STRING "unknown"
 #endif
@@ -68,11 +70,10 @@ constexpr int kExitOk = 0;
 constexpr int kExitFailure = 1;
 constexpr int kExitUsage = 2;
 constexpr const char* kProgram = "cge_slam";
-constexpr int kProgressBarWidth = 40;
 constexpr const char* kDefaultPreset = "walking_xyz";
 constexpr int kDefaultPresetFrames = 300;  // 10 s at 30 fps when --frames is not given
 
-bool progress_line_open = false;
+cge_tool::ProgressBar progress_bar{kProgram};  // drawn only on a terminal
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -182,19 +183,6 @@ class OutputFolder {
   bool created_out_ = false;
   bool committed_ = false;
 };
-
-// ---- progress --------------------------------------------------------------------------------------
-
-void draw_progress(int done, int total, double elapsed_s) {
-  const int filled = static_cast<int>(static_cast<long long>(kProgressBarWidth) * done / std::max(total, 1));
-  std::string bar(static_cast<std::size_t>(kProgressBarWidth), ' ');
-  std::fill(bar.begin(), bar.begin() + filled, '=');
-  if (filled < kProgressBarWidth) bar[static_cast<std::size_t>(filled)] = '>';
-  std::fprintf(stderr, "\r%s: [%s] %d/%d frames  %.1f s", kProgram, bar.c_str(), done, total, elapsed_s);
-  progress_line_open = done < total;
-  if (!progress_line_open) std::fputc('\n', stderr);
-  std::fflush(stderr);
-}
 
 // ---- frame sources -------------------------------------------------------------------------------
 
@@ -459,7 +447,7 @@ int run(Options opt) {
     } else {
       system.process(input);
     }
-    if (progress) draw_progress(i + 1, n, elapsed_s());
+    if (progress) progress_bar.draw(i + 1, n, elapsed_s());
   }
   system.finish();
 
@@ -512,11 +500,7 @@ int run(Options opt) {
   }
   print_line("tracking_median_ms", summary["stages"]["tracking"]["median_ms"].get<double>());
   print_line("total_median_ms", summary["stages"]["total"]["median_ms"].get<double>());
-  std::fflush(stdout);
-  if (std::ferror(stdout)) {
-    std::fprintf(stderr, "%s: error: cannot write to standard output\n", kProgram);
-    return kExitFailure;
-  }
+  if (!cge_tool::standard_output_written(kProgram)) return kExitFailure;
   return kExitOk;
 }
 
@@ -563,21 +547,18 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
     return kExitUsage;
   }
-  const auto end_progress_line = [] {
-    if (progress_line_open) std::fputc('\n', stderr);
-  };
   try {
     return run(opt);
   } catch (const UsageError& e) {
-    end_progress_line();
+    progress_bar.end_line();
     std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
     return kExitUsage;
   } catch (const std::invalid_argument& e) {
-    end_progress_line();
+    progress_bar.end_line();
     std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
     return kExitUsage;
   } catch (const std::exception& e) {
-    end_progress_line();
+    progress_bar.end_line();
     std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
     return kExitFailure;
   }
