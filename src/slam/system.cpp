@@ -273,10 +273,9 @@ void System::correct_loop(int query_keyframe) {
   };
   for (int k = 1; k < n; ++k) add_edge(k - 1, k, pose(k - 1).inverse() * pose(k));
   for (int a = 0; a < n; ++a) {
-    for (int b : map_.covisible_keyframes(a, -1)) {
-      if (b > a + 1 && map_.shared_points(a, b) >= lc.covisibility_min_shared_points) {
-        add_edge(a, b, pose(a).inverse() * pose(b));
-      }
+    for (int b : map_.covisible_keyframes(a, -1)) {  // most shared points first
+      if (map_.shared_points(a, b) < lc.covisibility_min_shared_points) break;
+      if (b > a + 1) add_edge(a, b, pose(a).inverse() * pose(b));
     }
   }
   for (const LoopEdge& e : loop_edges_) add_edge(e.match, e.query, e.T_match_query);
@@ -307,7 +306,7 @@ void System::correct_loop(int query_keyframe) {
         b.keyframe = o.keyframe_id;
         b.point = index;
         b.pixel_px = Eigen::Vector2d(kp.pt.x, kp.pt.y);
-        b.sigma_px = std::pow(settings_.frame.orb.scale_factor, kp.octave);
+        b.sigma_px = keypoint_sigma_px(kp, settings_.frame.orb.scale_factor);
         const double z = kf.points_camera_m[static_cast<std::size_t>(o.keypoint_index)].z();
         if (std::isfinite(z) && z > 0) {
           b.depth_m = z;
@@ -317,9 +316,8 @@ void System::correct_loop(int query_keyframe) {
       }
     }
     if (!points.empty()) {
-      std::vector<Eigen::Isometry3d> poses(static_cast<std::size_t>(n));
-      for (int k = 0; k < n; ++k) poses[static_cast<std::size_t>(k)] = map_.keyframe(k).T_world_camera;
-      const BundleAdjustmentResult ba = BundleAdjuster{lc.bundle}.adjust(intrinsics_, poses, points, observations, {0});
+      const BundleAdjustmentResult ba =
+          BundleAdjuster{lc.bundle}.adjust(intrinsics_, graph.T_world_camera, points, observations, {0});
       for (int k = 0; k < n; ++k) map_.set_keyframe_pose(k, ba.T_world_camera[static_cast<std::size_t>(k)]);
       for (std::size_t i = 0; i < point_ids.size(); ++i)
         map_.set_map_point_position(point_ids[i], ba.points_world_m[i]);

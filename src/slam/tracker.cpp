@@ -191,7 +191,7 @@ bool Tracker::refine_pose(const Frame& frame, const Map& map, const std::vector<
     PoseObservation o;
     o.point_world_m = map.map_point(matches[i]).position_world;
     o.pixel_px = Eigen::Vector2d(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
-    o.sigma_px = std::pow(orb_scale_factor_, std::max(frame.keypoints[i].octave, 0));
+    o.sigma_px = keypoint_sigma_px(frame.keypoints[i], orb_scale_factor_);
     observations.push_back(o);
     keypoint_of.push_back(static_cast<int>(i));
   }

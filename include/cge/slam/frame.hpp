@@ -2,6 +2,8 @@
 // Frame: one RGB-D image pair reduced to what tracking needs (ORB keypoints and descriptors, a 3-D
 // point per keypoint from depth, a dynamic label per keypoint), and FrameMaker, which makes it in
 // two timed steps: extract() (features and depth) and label() (dynamic elimination by mode).
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -43,6 +45,12 @@ struct Frame {
   bool is_static(int i) const { return labels[static_cast<std::size_t>(i)] == FeatureLabel::static_feature; }
   int count(FeatureLabel label) const;
 };
+
+/// Pixel standard deviation of a keypoint detected at pyramid level `octave`: scale_factor^octave
+/// (ORB-SLAM2's convention; a keypoint without an octave counts as level 0), pixels.
+inline double keypoint_sigma_px(const cv::KeyPoint& keypoint, double scale_factor) {
+  return std::pow(scale_factor, std::max(keypoint.octave, 0));
+}
 
 /// The seed of frame `frame_index`'s MAD samples: a mix (splitmix64) of the run's seed and the
 /// index, so a frame's labels depend on that frame alone.
