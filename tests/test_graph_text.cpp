@@ -7,6 +7,7 @@
 #include <string>
 
 #include "cge/io/graph_text.hpp"
+#include "cge/metrics/text_input.hpp"
 
 namespace {
 
@@ -121,7 +122,9 @@ TEST_CASE("edge list: ParseError carries source, line and reason", "[graph_text]
   CHECK(e.line() == 3);
   CHECK(std::string(e.what()) == "test.txt:3: " + e.reason());
   CHECK_THAT(e.reason(), Catch::Contains("got 1 field"));
-  const std::runtime_error& base = e;  // catchable as a runtime_error
+  const std::invalid_argument& base = e;          // invalid input, as every reader reports it
+  const cge::metrics::ParseError& same_type = e;  // one ParseError for every text reader
+  CHECK(&same_type == &e);
   CHECK_THAT(base.what(), Catch::StartsWith("test.txt:3:"));
   std::istringstream in("0 x\n");
   try {

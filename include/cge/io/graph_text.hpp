@@ -7,8 +7,8 @@
 //   - '#' starts a comment that runs to the end of the line (whole-line or trailing);
 //   - blank and comment-only lines are ignored; a UTF-8 byte order mark on line 1 is skipped;
 //   - numbers are read in the "C" locale whatever the global locale is.
-// Every malformed line throws cge::io::ParseError whose message is "<source>:<line>: <problem>",
-// with <source> the name the caller passes (a file name, or "<stdin>").
+// Every malformed line throws cge::io::ParseError (= cge::ParseError, a std::invalid_argument) whose message is
+// "<source>:<line>: <problem>", with <source> the name the caller passes (a file name, or "<stdin>").
 //
 // Edge list ("u v" or "u v w" per line):
 //   - u, v: vertex ids, non-negative decimal integers, 0-based unless EdgeListOptions::one_based
@@ -44,33 +44,16 @@
 
 #include <Eigen/Core>
 
+#include "cge/core/parse_error.hpp"
 #include "cge/core/semantic_instance.hpp"
 #include "cge/graph/graph.hpp"
 
 namespace cge {
 namespace io {
 
-/// A malformed line (or a failed read) in text input. what() is "<source>:<line>: <reason>".
-class ParseError : public std::runtime_error {
- public:
-  ParseError(std::string source, std::size_t line, std::string reason)
-      : std::runtime_error(source + ":" + std::to_string(line) + ": " + reason),
-        source_(std::move(source)),
-        line_(line),
-        reason_(std::move(reason)) {}
-
-  /// The name the input was read under: a file name or "<stdin>".
-  const std::string& source() const noexcept { return source_; }
-  /// 1-based line number of the offending line.
-  std::size_t line() const noexcept { return line_; }
-  /// The problem alone, without "<source>:<line>: ".
-  const std::string& reason() const noexcept { return reason_; }
-
- private:
-  std::string source_;
-  std::size_t line_;
-  std::string reason_;
-};
+/// A malformed line (or a failed read) in text input: the toolkit's one ParseError
+/// (cge/core/parse_error.hpp, a std::invalid_argument), "<source>:<line>: <reason>".
+using ParseError = ::cge::ParseError;
 
 struct EdgeListOptions {
   /// Vertex ids start at 1 (as in many graph collections); an id 0 is then an error.

@@ -19,30 +19,14 @@
 #include <utility>
 #include <vector>
 
+#include "cge/core/parse_error.hpp"
+
 namespace cge {
 namespace metrics {
 
-/// A malformed line in text input (a std::invalid_argument). what() is "<source>:<line>: <reason>".
-class ParseError : public std::invalid_argument {
- public:
-  ParseError(std::string source, std::size_t line, std::string reason)
-      : std::invalid_argument(source + ":" + std::to_string(line) + ": " + reason),
-        source_(std::move(source)),
-        line_(line),
-        reason_(std::move(reason)) {}
-
-  /// The name the input was read under: a file name or "<stdin>".
-  const std::string& source() const noexcept { return source_; }
-  /// 1-based line number of the offending line.
-  std::size_t line() const noexcept { return line_; }
-  /// The problem alone, without "<source>:<line>: ".
-  const std::string& reason() const noexcept { return reason_; }
-
- private:
-  std::string source_;
-  std::size_t line_;
-  std::string reason_;
-};
+/// A malformed line (or a failed read) in text input: the toolkit's one ParseError
+/// (cge/core/parse_error.hpp, a std::invalid_argument), "<source>:<line>: <reason>".
+using ParseError = ::cge::ParseError;
 
 namespace detail {
 
