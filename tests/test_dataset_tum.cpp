@@ -308,7 +308,7 @@ TEST_CASE("TumSequence: every bad input names its file and line", "[dataset][tum
     write_text(dir / "depth.txt", list({"1.0"}, "depth"));
     const std::string gt = (dir / "groundtruth.txt").string();
     write_text(dir / "groundtruth.txt", "# gt\n1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 1\n");
-    CHECK_THAT(open(), Contains(gt + ":3") && Contains("7 fields"));
+    CHECK_THAT(open(), Contains(gt + ":3") && Contains("found 7"));
     write_text(dir / "groundtruth.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 x\n");
     CHECK_THAT(open(), Contains(gt + ":2") && Contains("qw"));
     write_text(dir / "groundtruth.txt", "1.0 0 0 0 0 0 0 1\n0.5 0 0 0 0 0 0 1\n");

@@ -131,6 +131,20 @@ TEST_CASE("TUM reader: keep_last replaces a pose with a repeated stamp, as the T
   CHECK_THAT(tum_error("2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", settings), Catch::Contains("traj.txt:2:"));
 }
 
+TEST_CASE("TUM reader: keep_all keeps every line of a repeated stamp, in file order", "[metrics]") {
+  TumReadSettings settings;
+  settings.duplicate_timestamps = DuplicateTimestamps::keep_all;
+  std::istringstream in("1 0 0 0 0 0 0 1\n2 5 0 0 0 0 0 1\n2 7 0 0 0 0 0 1\n3 0 0 0 0 0 0 1\n");
+  const Trajectory t = read_tum_trajectory(in, "traj.txt", settings);
+  REQUIRE(t.size() == 4);
+  CHECK(t[1].timestamp_s == 2);
+  CHECK(t[2].timestamp_s == 2);
+  CHECK(t[1].T_world_camera.translation().x() == 5);
+  CHECK(t[2].T_world_camera.translation().x() == 7);
+  CHECK_THAT(tum_error("2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", settings),
+             Catch::Contains("traj.txt:2:") && Catch::Contains("must not decrease"));
+}
+
 TEST_CASE("TUM reader: a missing file or a folder is named", "[metrics]") {
   CHECK_THAT(cge_test::invalid_argument_message([] { read_tum_trajectory_file("/nonexistent/cge/traj.txt"); }),
              Catch::Contains("cannot open '/nonexistent/cge/traj.txt'"));

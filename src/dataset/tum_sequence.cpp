@@ -8,7 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "cge/dataset/tum_list.hpp"
-#include "ground_truth_reader.hpp"
+#include "cge/metrics/tum_trajectory_io.hpp"
 #include "text_fields.hpp"
 
 namespace cge {
@@ -162,7 +162,14 @@ TumSequence::TumSequence(fs::path folder, TumSequenceSettings settings)
     unassociated_rgb_ = static_cast<int>(rgb.size() - matches.size());
   }
   if (const auto gt = existing_file(folder_ / kGroundTruthFile)) {
-    ground_truth_ = detail::read_ground_truth(*gt, settings_.quaternion_norm_tolerance);
+    // The core reader, keeping repeated stamps in file order: TUM's own fr2_desk ground truth
+    // repeats one, and a dataset reader should hand over the file as it is.
+    metrics::TumReadSettings read;
+    read.max_quaternion_norm_error = settings_.quaternion_norm_tolerance;
+    read.duplicate_timestamps = metrics::DuplicateTimestamps::keep_all;
+    for (const metrics::StampedPose& pose : metrics::read_tum_trajectory_file(gt->string(), read)) {
+      ground_truth_.push_back(GroundTruthPose{pose.timestamp_s, pose.T_world_camera});
+    }
   }
   masks_folder_ = existing_folder(folder_ / kMasksDir);
   segmentation_folder_ = existing_folder(folder_ / kSegmentationDir);

@@ -10,8 +10,8 @@
 //     has 4 decimals, so its quaternions are off by about 1e-4);
 //   - timestamps strictly increase. A repeated timestamp is refused by default; with
 //     DuplicateTimestamps::keep_last the later line replaces the earlier one, which is what the
-//     TUM tools do (they key poses by timestamp in a dict). The official fr2_desk ground truth has
-//     one such repeat (line 10863). A decreasing timestamp is always refused;
+//     TUM tools do (they key poses by timestamp in a dict); keep_all keeps both (TumSequence). The official fr2_desk
+//     ground truth has one such repeat (line 10863). A decreasing timestamp is always refused;
 //   - any violation throws ParseError (a std::invalid_argument), "<source>:<line>: <reason>".
 //   An input without poses gives an empty trajectory; whether that is acceptable is the caller's call.
 // Writing: an optional '#' header line, then the timestamp with 6 decimals and the other values
@@ -41,6 +41,8 @@ namespace metrics {
 enum class DuplicateTimestamps {
   refuse,     ///< throw ParseError (the default: a repeated stamp usually means a broken writer)
   keep_last,  ///< the later line replaces the earlier pose (the TUM tools' behaviour)
+  keep_all,   ///< both lines kept, in file order (for readers that must not drop a line; the
+              ///< trajectory then has equal timestamps, which association does not accept)
 };
 
 /// Optional report of a read: lines whose pose was replaced by a later line with the same stamp.
@@ -99,13 +101,21 @@ inline Trajectory read_tum_trajectory(std::istream& in, const std::string& sourc
       previous_line = reader.line_number();
       continue;
     }
+    if (!trajectory.empty() && v[0] == trajectory.back().timestamp_s &&
+        settings.duplicate_timestamps == DuplicateTimestamps::keep_all) {
+      trajectory.push_back(pose);
+      previous_line = reader.line_number();
+      continue;
+    }
     if (!trajectory.empty() && v[0] == trajectory.back().timestamp_s) {
       reader.fail("timestamp " + std::string(fields[0]) + " repeats the one on line " + std::to_string(previous_line) +
                   " (the TUM tools keep the later line; allow that with DuplicateTimestamps::keep_last)");
     }
     if (!trajectory.empty() && !(v[0] > trajectory.back().timestamp_s)) {
       reader.fail("timestamp " + std::string(fields[0]) + " does not come after the one on line " +
-                  std::to_string(previous_line) + " (timestamps must increase)");
+                  std::to_string(previous_line) +
+                  (settings.duplicate_timestamps == DuplicateTimestamps::keep_all ? " (timestamps must not decrease)"
+                                                                                  : " (timestamps must increase)"));
     }
     trajectory.push_back(pose);
     previous_line = reader.line_number();
