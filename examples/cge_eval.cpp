@@ -1,19 +1,27 @@
 // cge_eval: trajectory and loop-closure metrics against ground truth (docs/EVALUATION.md).
 //   cge_eval ate GT EST [--max-difference 0.02] [--offset 0]       absolute trajectory error
+//                [--aligned-out CSV [--force]]                     and the aligned pairs, for plots
 //   cge_eval rpe GT EST [--delta 1] [--delta-unit s|frames]        relative pose error
 //   cge_eval loops GT_LOOPS LOOPS_CSV [--tolerance 0.001]          loop precision and recall
+//                [--score cge_score|bow_score] [--min-score X]     detections need score >= X
+//                [--curve CSV [--force]]                           P-R over every threshold
 //   cge_eval map MAP.ot [--sequence DIR] [--image PNG]             semantic octree scores (docs/MAPS.md)
 // GT and EST are TUM trajectories; ATE and RPE follow the TUM RGB-D benchmark tools.
 //
 // Output: one "name value" line per quantity on standard output (15 significant digits; "nan" for
 // an undefined ratio), or with --json one JSON object (null for undefined). Diagnostics go to
 // standard error. Exit codes: 0 success; 1 standard output could not be written; 2 bad usage or
-// bad input (the message names the file and line).
+// bad input (the message names the file and line). Files named by --aligned-out and --curve are
+// never overwritten without --force; one that cannot be written is exit code 1.
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -22,9 +30,11 @@
 #include <nlohmann/json.hpp>
 
 #include "cge/metrics/ate.hpp"
+#include "cge/metrics/ate_aligned_pairs.hpp"
 #include "cge/metrics/ground_truth_loops_io.hpp"
 #include "cge/metrics/loop_precision_recall.hpp"
 #include "cge/metrics/loop_queries_io.hpp"
+#include "cge/metrics/loop_threshold_curve.hpp"
 #include "cge/metrics/rpe.hpp"
 #include "cge/metrics/tum_trajectory_io.hpp"
 
@@ -55,6 +65,11 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// An output file that cannot be written: exit code 1.
+struct OutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 struct Options {
   std::string groundtruth;
   std::string estimate;
@@ -67,6 +82,12 @@ struct Options {
   double delta = m::RpeSettings{}.delta;
   std::string delta_unit = "s";
   double tolerance_s = m::LoopEvaluationSettings{}.timestamp_tolerance_s;
+  std::string score_column = "cge_score";
+  double min_score = -std::numeric_limits<double>::infinity();  // no threshold unless --min-score
+  bool min_score_given = false;
+  std::string curve;
+  std::string aligned_out;
+  bool force = false;
   std::string map_ot;
   std::string map_sequence;
   std::string map_image;
@@ -114,6 +135,35 @@ m::Trajectory read_trajectory(const std::string& path, const Options& opt) {
   return t;
 }
 
+/// The shortest of "%.15g", "%.16g", "%.17g" that reads back as `value` ("-inf" for -infinity).
+std::string round_trip_number(double value) {
+  char buf[64];
+  for (const int digits : {15, 16, 17}) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, value);
+    if (std::strtod(buf, nullptr) == value) break;
+  }
+  return buf;
+}
+
+/// Refuses an existing `path` unless `force` (UsageError naming the flag).
+void check_writable(const std::string& path, const char* flag, bool force) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw UsageError(std::string(flag) + ": '" + path + "' is a folder");
+  if (std::filesystem::exists(path, ec) && !force) {
+    throw UsageError(std::string(flag) + ": '" + path + "' exists (pass --force to overwrite it)");
+  }
+}
+
+/// Writes `path` through `writer`; OutputError when the file cannot be written.
+template <typename Writer>
+void write_file(const std::string& path, Writer&& writer) {
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  if (!file) throw OutputError("cannot write '" + path + "'");
+  writer(file);
+  file.flush();
+  if (!file) throw OutputError("cannot write '" + path + "'");
+}
+
 void add_statistics(Values& v, const std::string& prefix, const std::string& unit, const m::ErrorStatistics& s) {
   v.push_back(real(prefix + "rmse" + unit, s.rmse));
   v.push_back(real(prefix + "mean" + unit, s.mean));
@@ -128,6 +178,7 @@ Values run_ate(const Options& opt, nlohmann::ordered_json& inputs) {
     throw UsageError("--max-difference must be a finite positive number, got " + number(opt.max_difference_s));
   }
   if (!std::isfinite(opt.offset_s)) throw UsageError("--offset must be finite");
+  if (!opt.aligned_out.empty()) check_writable(opt.aligned_out, "--aligned-out", opt.force);
   const m::Trajectory gt = read_trajectory(opt.groundtruth, opt);
   const m::Trajectory est = read_trajectory(opt.estimate, opt);
   m::AteSettings settings;
@@ -138,6 +189,10 @@ Values run_ate(const Options& opt, nlohmann::ordered_json& inputs) {
             {"estimate", opt.estimate},
             {"max_difference_s", opt.max_difference_s},
             {"offset_s", opt.offset_s}};
+  if (!opt.aligned_out.empty()) {
+    write_file(opt.aligned_out, [&](std::ostream& f) { m::write_aligned_pairs_csv(f, m::aligned_pairs(gt, est, r)); });
+    inputs["aligned_out"] = opt.aligned_out;
+  }
   Values v = {count("groundtruth_poses", gt.size()), count("estimate_poses", est.size()),
               count("compared_pose_pairs", r.translation_m.count)};
   add_statistics(v, "ate_", "_m", r.translation_m);
@@ -201,17 +256,50 @@ Values run_loops(const Options& opt, nlohmann::ordered_json& inputs) {
   if (!(std::isfinite(opt.tolerance_s) && opt.tolerance_s >= 0)) {
     throw UsageError("--tolerance must be a finite number >= 0, got " + number(opt.tolerance_s));
   }
+  if (opt.min_score_given && !std::isfinite(opt.min_score)) {
+    throw UsageError("--min-score must be a finite number, got " + number(opt.min_score));
+  }
+  const m::LoopScoreColumn column = m::parse_loop_score_column(opt.score_column);
+  if (!opt.curve.empty()) check_writable(opt.curve, "--curve", opt.force);
   const std::vector<m::GroundTruthLoop> gt = m::read_ground_truth_loops_file(opt.loops_txt);
   const std::vector<m::LoopQuery> rows = m::read_loop_queries_file(opt.loops_csv);
   m::LoopEvaluationSettings settings;
   settings.timestamp_tolerance_s = opt.tolerance_s;
-  const m::LoopEvaluation e = m::evaluate_loops(gt, rows, settings);
+  const auto in_file = [&opt](auto&& compute) {  // names the file in "line <n>: ..." messages
+    try {
+      return compute();
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(opt.loops_csv + ": " + e.what());
+    }
+  };
+  const m::LoopEvaluation e = m::evaluate_loops(
+      gt, opt.min_score_given ? in_file([&] { return m::apply_score_threshold(rows, column, opt.min_score); }) : rows,
+      settings);
+  if (!opt.curve.empty()) {
+    // Thresholds read back as the same double (--min-score reproduces a row); the ratios as the
+    // standard output prints them.
+    const std::vector<m::LoopCurvePoint> curve =
+        in_file([&] { return m::loop_threshold_curve(gt, rows, column, settings); });
+    write_file(opt.curve, [&](std::ostream& f) {
+      f << "threshold,detections,correct_detections,precision,query_recall,event_recall\n";
+      for (const m::LoopCurvePoint& p : curve) {
+        f << round_trip_number(p.threshold) << ',' << p.evaluation.detections << ',' << p.evaluation.correct_detections
+          << ',' << number(p.evaluation.precision) << ',' << number(p.evaluation.query_recall) << ','
+          << number(p.evaluation.event_recall) << '\n';
+      }
+    });
+  }
   if (e.detections == 0) std::fprintf(stderr, "%s: note: no accepted loop: precision is undefined (nan)\n", kProgram);
   if (e.loop_queries == 0) {
     std::fprintf(stderr, "%s: note: no queried keyframe has a ground-truth loop: recall is undefined (nan)\n",
                  kProgram);
   }
-  inputs = {{"ground_truth_loops", opt.loops_txt}, {"loops_csv", opt.loops_csv}, {"tolerance_s", opt.tolerance_s}};
+  inputs = {{"ground_truth_loops", opt.loops_txt},
+            {"loops_csv", opt.loops_csv},
+            {"tolerance_s", opt.tolerance_s},
+            {"score", m::to_string(column)}};
+  if (opt.min_score_given) inputs["min_score"] = opt.min_score;
+  if (!opt.curve.empty()) inputs["curve"] = opt.curve;
   return {count("ground_truth_pairs", e.ground_truth_pairs),
           count("queried_keyframes", e.queried_keyframes),
           count("detections", e.detections),
@@ -277,6 +365,10 @@ int main(int argc, char** argv) {
   ate->add_option("--max-difference", opt.max_difference_s, "largest timestamp difference of an associated pair, s")
       ->capture_default_str();
   ate->add_option("--offset", opt.offset_s, "time offset added to the estimate's timestamps, s")->capture_default_str();
+  ate->add_option("--aligned-out", opt.aligned_out,
+                  "write the associated pairs after the alignment as CSV "
+                  "(timestamp,gt_x,gt_y,gt_z,est_x,est_y,est_z,error_m)");
+  ate->add_flag("--force", opt.force, "overwrite an existing --aligned-out file");
   add_common(ate);
 
   CLI::App* rpe = app.add_subcommand("rpe", "relative pose error over a fixed delta (evaluate_rpe.py --fixed_delta)");
@@ -292,6 +384,19 @@ int main(int argc, char** argv) {
   loops->add_option("LOOPS_CSV", opt.loops_csv, "the loop closer's log (cge_slam's loops.csv)")->required();
   loops->add_option("--tolerance", opt.tolerance_s, "two timestamps within this are the same frame, s")
       ->capture_default_str();
+  loops->add_option("--score", opt.score_column, "the score column --min-score and --curve threshold")
+      ->check(CLI::IsMember({"cge_score", "bow_score"}))
+      ->capture_default_str();
+  loops
+      ->add_option("--min-score", opt.min_score,
+                   "an accepted row is a detection only when its --score column is >= this (default: every "
+                   "accepted row)")
+      ->each([&opt](const std::string&) { opt.min_score_given = true; });
+  loops->add_option("--curve", opt.curve,
+                    "write precision and recall at every threshold as CSV "
+                    "(threshold,detections,correct_detections,precision,query_recall,event_recall): a first row at "
+                    "-inf, then one per distinct --score value among accepted rows, ascending");
+  loops->add_flag("--force", opt.force, "overwrite an existing --curve file");
   add_common(loops);
 
 #ifdef CGE_EVAL_HAS_MAPS
@@ -340,6 +445,9 @@ int main(int argc, char** argv) {
   } catch (const UsageError& e) {
     std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
     return kExitUsage;
+  } catch (const OutputError& e) {
+    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
+    return kExitOutput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
     return kExitUsage;

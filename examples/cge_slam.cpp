@@ -3,9 +3,11 @@
 //   trajectory.txt  every tracked frame, TUM format (T_world_camera)
 //   keyframes.txt   the keyframes, TUM format
 //   loops.csv       the loop closer's decisions (with --vocabulary; header only without it)
-//   frames.csv      per frame: tracking state, features, dynamic labels, matches, keyframe
+//   frames.csv      per frame: tracking state, features, dynamic labels, matches, keyframe, and the
+//                   keypoints on moving bodies (with ground truth: synthetic masks/ or rendered)
 //   timings.csv     per frame and stage, milliseconds
-//   summary.json    counts, the run's settings and mean/median time per stage
+//   summary.json    counts, the run's settings (loop_settings), the dynamic-feature leak rate
+//                   (dynamic_leak) and mean/median time per stage
 //   groundtruth.txt (without --dataset) the rendered poses, for cge_eval
 // trajectory.txt, keyframes.txt, loops.csv, frames.csv and groundtruth.txt are deterministic (same
 // inputs and seed: same bytes); timings.csv and the `stages` object of summary.json are
@@ -48,11 +50,13 @@
 #include "cge/metrics/ate.hpp"
 #include "cge/metrics/rpe.hpp"
 #include "cge/segmentation/coco_classes.hpp"
+#include "cge/segmentation/precomputed_mask_reader.hpp"
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
 #include "cge/sim/segmentation_error_model.hpp"
 #include "cge/slam/label_instances.hpp"
 #include "cge/slam/loop_closer.hpp"
+#include "cge/slam/moving_keypoints.hpp"
 #include "cge/slam/output_files.hpp"
 #include "cge/slam/system.hpp"
 
@@ -91,10 +95,21 @@ struct Options {
   int frames = 0;  // 0: all (dataset) or kDefaultPresetFrames (rendered)
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   std::string loop_correction = "pgo+ba";  // none | pgo | pgo+ba
-  bool map = false;                        // write map.ply, map.ot, map.bt, map_top.png
+  std::string loop_scoring = cge::slam::to_string(cge::slam::LoopCloserSettings{}.scoring);
+  double loop_min_score = 0;  // used only when --loop-min-score is given (loop_min_score_given)
+  bool loop_min_score_given = false;
+  std::string cge_scaling;  // raw | normalised; empty: the LoopCloserSettings default
+  bool map = false;         // write map.ply, map.ot, map.bt, map_top.png
   std::string out;
   bool force = false;
 };
+
+/// A number as "%g" prints it (help texts).
+std::string short_number(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", value);
+  return buffer;
+}
 
 // ---- settings ------------------------------------------------------------------------------------
 
@@ -202,8 +217,11 @@ class FrameSource {
 
 class DatasetSource final : public FrameSource {
  public:
-  explicit DatasetSource(const cge::dataset::TumSequence& sequence, int frames)
-      : sequence_(sequence), frames_(frames) {}
+  /// `moving_masks`: the sequence's exact ground-truth mask folder (a synthetic sequence's masks/),
+  /// or null when it has none (real data): the frames then carry no moving mask.
+  DatasetSource(const cge::dataset::TumSequence& sequence, int frames,
+                std::unique_ptr<cge::PrecomputedMaskReader> moving_masks)
+      : sequence_(sequence), frames_(frames), moving_masks_(std::move(moving_masks)) {}
   std::vector<std::pair<double, Eigen::Isometry3d>> ground_truth() const override {
     std::vector<std::pair<double, Eigen::Isometry3d>> gt;
     for (const auto& p : sequence_.ground_truth()) gt.emplace_back(p.timestamp_s, p.T_world_camera);
@@ -218,19 +236,26 @@ class DatasetSource final : public FrameSource {
     in.bgr = f.bgr;
     in.depth = f.depth;
     in.stem = f.rgb_stem;
+    if (moving_masks_ != nullptr) {
+      in.moving_mask = cge::slam::moving_mask_of(moving_masks_->read(in.stem, in.bgr.size()), in.bgr.size());
+    }
     return in;
   }
 
  private:
   const cge::dataset::TumSequence& sequence_;
   int frames_;
+  std::unique_ptr<cge::PrecomputedMaskReader> moving_masks_;
 };
 
 class RenderedSource final : public FrameSource {
  public:
   RenderedSource(const std::string& preset, int frames, std::uint64_t seed, bool segment)
       : renderer_(cge::sim::make_preset(preset, frames, seed)), model_(renderer_.instances(), seed), segment_(segment) {
-    for (const cge::sim::InstanceInfo& i : renderer_.instances()) class_of_id_[i.id] = i.class_id;
+    for (const cge::sim::InstanceInfo& i : renderer_.instances()) {
+      class_of_id_[i.id] = i.class_id;
+      if (i.moving) moving_ids_.push_back(i.id);
+    }
   }
   int frame_count() const override { return renderer_.frame_count(); }
   const cge::sim::PinholeCamera& camera() const { return renderer_.camera(); }
@@ -244,6 +269,9 @@ class RenderedSource final : public FrameSource {
     char stem[32];
     std::snprintf(stem, sizeof stem, "%.6f", last_.timestamp_s);
     in.stem = stem;
+    // Ground truth of the leak count: the exact labels of the bodies that move.
+    in.moving_mask = cv::Mat::zeros(last_.instance_labels.size(), CV_8UC1);
+    for (const int id : moving_ids_) in.moving_mask.setTo(255, last_.instance_labels == id);
     return in;
   }
   bool provides_instances() const override { return segment_; }
@@ -267,6 +295,7 @@ class RenderedSource final : public FrameSource {
   cge::sim::SegmentationErrorModel model_;
   bool segment_;
   std::map<int, int> class_of_id_;
+  std::vector<int> moving_ids_;
   cge::sim::RenderedFrame last_;
 };
 
@@ -279,8 +308,25 @@ double median(std::vector<double> v) {
   return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+/// The dynamic-feature leak over the frames with a moving mask: rate = kept / moving keypoints
+/// (null when no frame had ground truth or no keypoint lay on a moving body).
+nlohmann::ordered_json dynamic_leak(const std::vector<cge::slam::FrameRecord>& frames) {
+  long long with_truth = 0, moving = 0, kept = 0;
+  for (const auto& r : frames) {
+    if (r.moving_keypoints < 0) continue;
+    ++with_truth;
+    moving += r.moving_keypoints;
+    kept += r.moving_kept;
+  }
+  nlohmann::ordered_json j = {
+      {"frames_with_ground_truth", with_truth}, {"moving_keypoints", moving}, {"moving_kept", kept}};
+  j["rate"] = moving > 0 ? nlohmann::ordered_json(static_cast<double>(kept) / static_cast<double>(moving)) : nullptr;
+  return j;
+}
+
 nlohmann::ordered_json make_summary(const cge::slam::System& system, const Options& opt, const std::string& source,
-                                    const std::vector<std::pair<double, Eigen::Isometry3d>>& ground_truth) {
+                                    const std::vector<std::pair<double, Eigen::Isometry3d>>& ground_truth,
+                                    const nlohmann::ordered_json& loop_settings) {
   using cge::slam::TrackingState;
   nlohmann::ordered_json j;
   const auto& frames = system.frames();
@@ -303,6 +349,8 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
   j["segmentation"] = opt.segmentation;
   j["source"] = source;
   j["seed"] = opt.seed;
+  j["loop_settings"] = loop_settings;
+  j["dynamic_leak"] = dynamic_leak(frames);
   nlohmann::ordered_json stages;
   for (int s = 0; s < cge::slam::kStageCount; ++s) {
     std::vector<double> ms;
@@ -369,6 +417,37 @@ int run(Options opt) {
   if (opt.segmentation == "yolo" && opt.model.empty()) throw UsageError("--segmentation yolo needs --model ONNX");
   if (opt.segmentation == "precomputed" && opt.masks.empty())
     throw UsageError("--segmentation precomputed needs --masks DIR");
+  cge::slam::LoopCloserSettings loop_settings;
+  try {
+    loop_settings.scoring = cge::slam::loop_scoring_from_string(opt.loop_scoring);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--loop-scoring: ") + e.what());
+  }
+  // The acceptance gate of the chosen scoring (step 3): S_sum for cge and combined, BoW for bow_only.
+  const bool bow_gate = loop_settings.scoring == cge::slam::LoopScoring::bow_only;
+  double& min_score = bow_gate ? loop_settings.min_bow_score : loop_settings.min_cge_score;
+  if (opt.loop_min_score_given) {
+    if (!std::isfinite(opt.loop_min_score)) throw UsageError("--loop-min-score must be a finite number");
+    min_score = opt.loop_min_score;
+  }
+  if (opt.cge_scaling == "raw") {
+    loop_settings.exponent_scaling = cge::ScalingKind::raw;
+  } else if (opt.cge_scaling == "normalised") {
+    loop_settings.exponent_scaling = cge::ScalingKind::normalised_mean;
+  } else if (!opt.cge_scaling.empty()) {
+    throw UsageError("--cge-scaling: '" + opt.cge_scaling + "' is not raw or normalised");
+  }
+  try {
+    loop_settings.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("loop settings: ") + e.what());
+  }
+  const nlohmann::ordered_json loop_settings_json = {
+      {"enabled", !opt.vocabulary.empty()},
+      {"scoring", cge::slam::to_string(loop_settings.scoring)},
+      {"min_score", min_score},
+      {"min_score_setting", bow_gate ? "min_bow_score" : "min_cge_score"},
+      {"cge_scaling", loop_settings.exponent_scaling == cge::ScalingKind::raw ? "raw" : "normalised"}};
   std::unique_ptr<cge::bow::Vocabulary> vocabulary;
   if (!opt.vocabulary.empty()) {
     vocabulary = std::make_unique<cge::bow::Vocabulary>(cge::bow::Vocabulary::load_file(opt.vocabulary));
@@ -409,7 +488,16 @@ int run(Options opt) {
       throw UsageError("no settings: " + opt.dataset + " has no camera.yaml (give --settings YAML)");
     }
     const int frames = opt.frames > 0 ? std::min(opt.frames, sequence->frame_count()) : sequence->frame_count();
-    source = std::make_unique<DatasetSource>(*sequence, frames);
+    // A synthetic sequence's exact masks give the leak count's ground truth; real data has none.
+    std::unique_ptr<cge::PrecomputedMaskReader> moving_masks;
+    const fs::path exact_masks =
+        fs::path(opt.dataset) / cge::dataset::folder_name(cge::dataset::GroundTruthMasks::exact);
+    if (fs::exists(exact_masks / "instances.csv")) {
+      cge::PrecomputedMaskSettings mask_settings;
+      mask_settings.require_every_frame = true;  // the simulator writes a PNG for every frame
+      moving_masks = std::make_unique<cge::PrecomputedMaskReader>(exact_masks.string(), mask_settings);
+    }
+    source = std::make_unique<DatasetSource>(*sequence, frames, std::move(moving_masks));
     source_name = opt.dataset;
     cge::dataset::SegmentationSourceSettings seg;
     seg.source = cge::dataset::parse_segmentation_source(opt.segmentation);
@@ -435,8 +523,8 @@ int run(Options opt) {
   for (int i = 0; i < n; ++i) {
     const cge::slam::FrameInput input = source->frame(i);
     if (i == 0 && vocabulary != nullptr) {
-      system.set_loop_closer(
-          std::make_unique<cge::slam::LoopCloser>(std::move(*vocabulary), intrinsics, input.bgr.cols, input.bgr.rows));
+      system.set_loop_closer(std::make_unique<cge::slam::LoopCloser>(std::move(*vocabulary), intrinsics, input.bgr.cols,
+                                                                     input.bgr.rows, loop_settings));
     }
     if (own_instances) {
       const auto seg_start = std::chrono::steady_clock::now();
@@ -457,7 +545,7 @@ int run(Options opt) {
   out.write("frames.csv", [&](std::ostream& f) { cge::slam::write_frames_csv(f, system.frames()); });
   out.write("timings.csv", [&](std::ostream& f) { cge::slam::write_timings_csv(f, system.frames()); });
   const auto gt = source->ground_truth();
-  nlohmann::ordered_json summary = make_summary(system, opt, source_name, gt);
+  nlohmann::ordered_json summary = make_summary(system, opt, source_name, gt, loop_settings_json);
   if (opt.map) {
     // Semantic maps from the final (optimised) keyframes: dense cloud, octree, top view, scores.
     cge::mapping::SemanticMapBuilder map(intrinsics);
@@ -491,6 +579,9 @@ int run(Options opt) {
   print_line("keyframes", system.map().keyframe_count());
   print_line("loops_accepted", summary["loops"]["accepted"].get<double>());
   print_line("loop_corrections", system.loop_corrections());
+  if (!summary["dynamic_leak"]["rate"].is_null()) {
+    print_line("dynamic_leak_rate", summary["dynamic_leak"]["rate"].get<double>());
+  }
   if (summary.contains("ate") && summary["ate"].contains("rmse_m")) {
     print_line("ate_rmse_m", summary["ate"]["rmse_m"].get<double>());
   }
@@ -528,6 +619,22 @@ int main(int argc, char** argv) {
                  "what an accepted loop triggers: none (detect and log only), pgo (pose graph), pgo+ba (and global "
                  "bundle adjustment)")
       ->check(CLI::IsMember({"none", "pgo", "pgo+ba"}));
+  app.add_option("--loop-scoring", opt.loop_scoring,
+                 "what ranks and gates loop candidates: cge (S_sum, the paper), bow_only (BoW score), combined "
+                 "(S_sum x relative BoW score)")
+      ->check(CLI::IsMember({"cge", "bow_only", "combined"}))
+      ->capture_default_str();
+  app.add_option("--loop-min-score", opt.loop_min_score,
+                 "acceptance gate of the chosen scoring: least S_sum (cge, combined; default " +
+                     short_number(cge::slam::LoopCloserSettings{}.min_cge_score) +
+                     ") or BoW score (bow_only; default " +
+                     short_number(cge::slam::LoopCloserSettings{}.min_bow_score) + ")")
+      ->each([&opt](const std::string&) { opt.loop_min_score_given = true; });
+  app.add_option("--cge-scaling", opt.cge_scaling,
+                 std::string("exponent scaling of the degree-degree entropy in the loop closer: raw (the paper's) or "
+                             "normalised (by the mean exponent); default ") +
+                     (cge::slam::LoopCloserSettings{}.exponent_scaling == cge::ScalingKind::raw ? "raw" : "normalised"))
+      ->check(CLI::IsMember({"raw", "normalised"}));
   app.add_option("--seed", opt.seed, "seed of the MAD samples (and of the rendered sequence)")->capture_default_str();
   app.add_option("--frames", opt.frames, "process at most this many frames (rendered: default 300)");
   app.add_option("--reference-min-observations", opt.reference_min_observations,

@@ -62,12 +62,12 @@ void write_timings_csv(std::ostream& out, const std::vector<FrameRecord>& frames
 
 void write_frames_csv(std::ostream& out, const std::vector<FrameRecord>& frames) {
   out << "frame,timestamp,state,keypoints,dynamic_by_mask,dynamic_by_mad,instances,matches,inliers,keyframe,"
-         "keyframe_rule\n";
+         "keyframe_rule,moving_keypoints,moving_kept\n";
   for (const FrameRecord& r : frames) {
     out << r.index << ',' << format("%.6f", r.timestamp_s) << ',' << to_string(r.state) << ',' << r.keypoints << ','
         << r.dynamic_by_mask << ',' << r.dynamic_by_mad << ',' << r.instances << ',' << r.matches << ',' << r.inliers
         << ',' << (r.keyframe_id >= 0 ? std::to_string(r.keyframe_id) : "") << ','
-        << (r.keyframe_id >= 0 ? r.keyframe_rule : "") << '\n';
+        << (r.keyframe_id >= 0 ? r.keyframe_rule : "") << ',' << r.moving_keypoints << ',' << r.moving_kept << '\n';
   }
 }
 

@@ -8,6 +8,7 @@
 
 #include "cge/opencv/keypoint.hpp"
 #include "cge/slam/loop_closer.hpp"
+#include "cge/slam/moving_keypoints.hpp"
 
 namespace cge {
 namespace slam {
@@ -105,6 +106,15 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
   record.dynamic_by_mask = frame.count(FeatureLabel::dynamic_by_mask);
   record.dynamic_by_mad = frame.count(FeatureLabel::dynamic_by_mad);
   record.instances = static_cast<int>(frame.instances.size());
+  if (!input.moving_mask.empty()) {
+    if (input.moving_mask.type() != CV_8UC1 || input.moving_mask.size() != input.bgr.size()) {
+      throw std::invalid_argument("System::process: frame " + std::to_string(input.index) +
+                                  ": the moving mask is not CV_8UC1 of the image's size");
+    }
+    const MovingKeypointCounts moving = count_moving_keypoints(frame.keypoints, frame.labels, input.moving_mask);
+    record.moving_keypoints = moving.moving_keypoints;
+    record.moving_kept = moving.moving_kept;
+  }
 
   t = Clock::now();
   TrackResult track = tracker_.track(frame, map_);

@@ -122,3 +122,19 @@ if(TARGET cge_pipeline)
   cge_cli_test(eval_map_bt PROGRAM cge_eval EXIT 2 ARGS map eval/map3.bt STDERR "is not an OctoMap \\.ot file")
   cge_cli_test(eval_map_missing PROGRAM cge_eval EXIT 2 ARGS map eval/no_such_map.ot STDERR "is not a readable file")
 endif()
+
+# Threshold sweep and score gate of loops (eval/loops_curve.csv: the log of
+# tests/test_metrics_outputs.cpp, hand-worked there), and the files --curve and --aligned-out write.
+cge_cli_test(eval_loops_min_score PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops_curve.csv --min-score 0.7
+  STDOUT "detections 3" "correct_detections 2" "precision 0\\.666666666666667" "query_recall 0\\.4" "event_recall 1")
+cge_cli_test(eval_loops_min_score_bow PROGRAM cge_eval
+  ARGS loops eval/loops.txt eval/loops_curve.csv --score bow_score --min-score 0.4
+  STDOUT "detections 4" "correct_detections 2" "precision 0\\.5" "query_recall 0\\.4" "event_recall 0\\.5")
+cge_cli_test(eval_loops_bad_score PROGRAM cge_eval EXIT 2 ARGS loops eval/loops.txt eval/loops_curve.csv --score S_sum
+  STDERR "--score")
+cge_cli_test(eval_loops_bad_min_score PROGRAM cge_eval EXIT 2
+  ARGS loops eval/loops.txt eval/loops_curve.csv --min-score nan STDERR "--min-score")
+add_test(NAME cli.eval_curve_and_aligned_out
+         COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:cge_eval> -DWORK=${CMAKE_CURRENT_BINARY_DIR}/eval_outputs
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/run_eval_outputs.cmake
+         WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})

@@ -4,7 +4,8 @@
 //   keyframes.txt   TUM format, the keyframes' current poses
 //   loops.csv       one row per keyframe the loop closer processed
 //   timings.csv     per frame and stage, milliseconds (measurements: differ between runs)
-//   frames.csv      per frame: tracking state, feature and match counts, keyframe (deterministic)
+//   frames.csv      per frame: tracking state, feature and match counts, keyframe, keypoints on
+//                   moving bodies and of those the kept ones (-1 without ground truth) (deterministic)
 // TUM lines: `timestamp tx ty tz qx qy qz qw`, timestamp with 6 decimals, the rest with 9
 // significant digits, the quaternion with qw >= 0 (one of its two signs, so output is stable).
 #include <ostream>

@@ -39,6 +39,9 @@ struct FrameInput {
   cv::Mat bgr;             ///< CV_8UC3
   cv::Mat depth;           ///< CV_16UC1 in settings.frame.depth_units_per_metre units, or CV_32FC1 metres
   std::string stem;        ///< the RGB file name without extension (what mask folders are keyed by)
+  /// Optional ground truth for the leak count: CV_8UC1 of the image's size, non-zero on the pixels
+  /// of bodies that move in the world; empty = unknown (cge/slam/moving_keypoints.hpp).
+  cv::Mat moving_mask;
 };
 
 /// Stages timed per frame, in the column order of timings.csv.
@@ -72,6 +75,10 @@ struct FrameRecord {
   int inliers = 0;
   int keyframe_id = -1;                ///< the keyframe made from this frame (possibly decided a few frames later)
   const char* keyframe_rule = "none";  ///< the policy rule that made it one
+  /// Keypoints on FrameInput::moving_mask (pixel rounding of cge/slam/moving_keypoints.hpp), and of
+  /// those the ones labelled static (passed on to tracking); both -1 when the mask was empty.
+  int moving_keypoints = -1;
+  int moving_kept = -1;
   std::array<double, kStageCount> times_ms{};  ///< per Stage, milliseconds (measurements)
 
   bool has_pose() const { return state != TrackingState::lost; }

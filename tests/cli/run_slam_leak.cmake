@@ -1,0 +1,122 @@
+# Command-line test of cge_slam's leak count and loop settings in its outputs:
+#   cmake -DEXE=<cge_slam> [-DSIM=<cge_sim>] -DWORK=<a folder of this test's own> -P run_slam_leak.cmake
+# 1. rendered walking_xyz (no --dataset), mode none: every frame has ground truth, nothing is
+#    filtered, so moving_kept == moving_keypoints in frames.csv and summary.json; loop_settings
+#    holds the defaults (combined, min_cge_score 0.5, normalised).
+# 2. --loop-scoring bow_only --loop-min-score 0.1 --cge-scaling raw are recorded in loop_settings.
+# 3. (with cge_sim) the same sequence written to a folder: the masks/ folder gives the same
+#    moving_keypoints per frame as the in-process renderer's labels; without masks/instances.csv
+#    (as real TUM data) no frame has ground truth and the rate is null.
+cmake_minimum_required(VERSION 3.19)
+
+foreach(var EXE WORK)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "run_slam_leak.cmake: ${var} is not set")
+  endif()
+endforeach()
+file(REMOVE_RECURSE "${WORK}")
+set(frames 6)
+set(common --frames ${frames} --seed 3)
+
+function(run_tool expected_rc)
+  execute_process(COMMAND ${ARGN} INPUT_FILE "${CMAKE_CURRENT_LIST_DIR}/empty.txt"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 300)
+  if(NOT "${rc}" STREQUAL "${expected_rc}")
+    message(FATAL_ERROR "${ARGN}: exit code ${rc}, expected ${expected_rc}\n--- stdout ---\n${out}--- stderr ---\n${err}")
+  endif()
+endfunction()
+
+# `expected` is a regex matched against the whole value (CMake prints JSON numbers with 17 digits).
+function(expect_json file expected)
+  file(READ "${file}" json)
+  string(JSON value GET "${json}" ${ARGN})
+  if(NOT "${value}" MATCHES "^${expected}$")
+    message(FATAL_ERROR "${file}: ${ARGN} is '${value}', expected '${expected}'")
+  endif()
+endfunction()
+
+# The moving_keypoints and moving_kept columns of frames.csv (the last two) as "a/b;a/b;...".
+function(moving_columns file result)
+  file(STRINGS "${file}" lines)
+  list(POP_FRONT lines header)
+  if(NOT header MATCHES ",moving_keypoints,moving_kept$")
+    message(FATAL_ERROR "${file}: the header does not end with moving_keypoints,moving_kept: ${header}")
+  endif()
+  set(pairs)
+  foreach(line IN LISTS lines)
+    if(NOT line MATCHES ",(-?[0-9]+),(-?[0-9]+)$")
+      message(FATAL_ERROR "${file}: no moving counts at the end of '${line}'")
+    endif()
+    list(APPEND pairs "${CMAKE_MATCH_1}/${CMAKE_MATCH_2}")
+  endforeach()
+  set(${result} "${pairs}" PARENT_SCOPE)
+endfunction()
+
+# 1.
+run_tool(0 "${EXE}" ${common} --mode none --out "${WORK}/rendered")
+set(summary "${WORK}/rendered/summary.json")
+expect_json("${summary}" ${frames} dynamic_leak frames_with_ground_truth)
+file(READ "${summary}" json)
+string(JSON moving GET "${json}" dynamic_leak moving_keypoints)
+string(JSON kept GET "${json}" dynamic_leak moving_kept)
+if(NOT moving GREATER 0 OR NOT moving EQUAL kept)
+  message(FATAL_ERROR "mode none: ${kept} of ${moving} moving keypoints kept, expected all of at least one")
+endif()
+string(JSON rate GET "${json}" dynamic_leak rate)
+if(NOT rate MATCHES "^1(\\.0*)?$")
+  message(FATAL_ERROR "mode none: the leak rate is ${rate}, expected 1")
+endif()
+moving_columns("${WORK}/rendered/frames.csv" rendered_pairs)
+set(sum 0)
+foreach(pair IN LISTS rendered_pairs)
+  string(REPLACE "/" ";" ab "${pair}")
+  list(GET ab 0 a)
+  list(GET ab 1 b)
+  if(NOT a EQUAL b OR a LESS 0)
+    message(FATAL_ERROR "mode none: frames.csv row ${pair} keeps fewer than it has, or has no ground truth")
+  endif()
+  math(EXPR sum "${sum} + ${a}")
+endforeach()
+if(NOT sum EQUAL moving)
+  message(FATAL_ERROR "summary.json moving_keypoints ${moving} is not the sum ${sum} of frames.csv")
+endif()
+expect_json("${summary}" OFF loop_settings enabled)
+expect_json("${summary}" combined loop_settings scoring)
+expect_json("${summary}" "0\\.50*" loop_settings min_score)
+expect_json("${summary}" min_cge_score loop_settings min_score_setting)
+expect_json("${summary}" normalised loop_settings cge_scaling)
+
+# 2.
+run_tool(0 "${EXE}" ${common} --mode none --loop-scoring bow_only --loop-min-score 0.1 --cge-scaling raw
+         --out "${WORK}/settings")
+set(summary "${WORK}/settings/summary.json")
+expect_json("${summary}" bow_only loop_settings scoring)
+expect_json("${summary}" "0\\.10*1?" loop_settings min_score)
+expect_json("${summary}" min_bow_score loop_settings min_score_setting)
+expect_json("${summary}" raw loop_settings cge_scaling)
+
+# 3.
+if(DEFINED SIM)
+  run_tool(0 "${SIM}" --preset walking_xyz ${common} --out "${WORK}/sequence")
+  run_tool(0 "${EXE}" --dataset "${WORK}/sequence" --mode none --out "${WORK}/folder")
+  expect_json("${WORK}/folder/summary.json" ${frames} dynamic_leak frames_with_ground_truth)
+  moving_columns("${WORK}/folder/frames.csv" folder_pairs)
+  if(NOT folder_pairs STREQUAL rendered_pairs)
+    message(FATAL_ERROR "moving counts from masks/ (${folder_pairs}) differ from the renderer's (${rendered_pairs})")
+  endif()
+  file(REMOVE "${WORK}/sequence/masks/instances.csv")
+  run_tool(0 "${EXE}" --dataset "${WORK}/sequence" --mode none --out "${WORK}/no_truth")
+  expect_json("${WORK}/no_truth/summary.json" 0 dynamic_leak frames_with_ground_truth)
+  file(READ "${WORK}/no_truth/summary.json" json)
+  string(JSON rate_type TYPE "${json}" dynamic_leak rate)
+  if(NOT rate_type STREQUAL "NULL")
+    message(FATAL_ERROR "without ground truth the leak rate is of type ${rate_type}, expected null")
+  endif()
+  moving_columns("${WORK}/no_truth/frames.csv" none_pairs)
+  foreach(pair IN LISTS none_pairs)
+    if(NOT pair STREQUAL "-1/-1")
+      message(FATAL_ERROR "without ground truth frames.csv has ${pair}, expected -1/-1")
+    endif()
+  endforeach()
+endif()
+file(REMOVE_RECURSE "${WORK}")
