@@ -126,6 +126,21 @@ bool has_depth(const Keyframe& kf, int row) {
 
 }  // namespace
 
+CGESimilarity<double> loop_similarity(const LoopCloserSettings& settings) {
+  CGESimilarity<double> similarity;
+  similarity.settings = settings.similarity;
+  similarity.graph_builder.settings = settings.graph;
+  similarity.degree_entropy.settings = settings.degree_entropy;
+  similarity.degree_entropy.scaling.kind = settings.exponent_scaling;
+  return similarity;
+}
+
+Graph<double> own_mask_graph(const Keyframe& kf, const ImageRegion<double>& image,
+                             const GraphBuilder<double>& builder) {
+  const std::vector<cv::KeyPoint> kp = select_keypoints(kf, static_feature_rows(kf));
+  return builder.build(image, kp, kf.dynamic_mask, NoMask{}, kf.instances);
+}
+
 LoopCloser::LoopCloser(std::unique_ptr<BowModel> model, const PinholeIntrinsics<double>& camera, int image_width_px,
                        int image_height_px, const LoopCloserSettings& settings)
     : model_(std::move(model)), camera_(camera), settings_(settings) {
@@ -138,10 +153,7 @@ LoopCloser::LoopCloser(std::unique_ptr<BowModel> model, const PinholeIntrinsics<
   }
   image_.width_px = image_width_px;
   image_.height_px = image_height_px;
-  similarity_.settings = settings_.similarity;
-  similarity_.graph_builder.settings = settings_.graph;
-  similarity_.degree_entropy.settings = settings_.degree_entropy;
-  similarity_.degree_entropy.scaling.kind = settings_.exponent_scaling;
+  similarity_ = loop_similarity(settings_);
 }
 
 LoopCloser::LoopCloser(bow::Vocabulary vocabulary, const PinholeIntrinsics<double>& camera, int image_width_px,
@@ -152,8 +164,7 @@ LoopCloser::LoopCloser(bow::Vocabulary vocabulary, const PinholeIntrinsics<doubl
 const LoopCloser::CachedEntropies& LoopCloser::own_entropies(const Keyframe& kf) {
   CachedEntropies& c = cache_.at(static_cast<std::size_t>(kf.id));
   if (c.ready) return c;
-  const std::vector<cv::KeyPoint> kp = select_keypoints(kf, static_feature_rows(kf));
-  const Graph<double> g = similarity_.graph_builder.build(image_, kp, kf.dynamic_mask, NoMask{}, kf.instances);
+  const Graph<double> g = own_mask_graph(kf, image_, similarity_.graph_builder);
   c.has_nodes = g.num_nodes() > 0;
   if (c.has_nodes) c.entropies = similarity_.entropies(g);
   c.ready = true;

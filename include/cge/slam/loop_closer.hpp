@@ -170,5 +170,14 @@ class LoopCloser {
 /// Rows of the keyframe's static features (labels == static_feature), ascending.
 std::vector<int> static_feature_rows(const Keyframe& kf);
 
+/// The CGESimilarity a LoopCloser with `settings` scores with (graph builder, degree-degree entropy
+/// with the settings' exponent scaling, edge entropy): for studies that must measure exactly what
+/// loop closing uses (examples/cge_loop_study.cpp).
+CGESimilarity<double> loop_similarity(const LoopCloserSettings& settings);
+
+/// The graph a LoopCloser scores `kf` by in own_mask mode: its static keypoints, its own dynamic
+/// mask and its semantic instances, in `image`.
+Graph<double> own_mask_graph(const Keyframe& kf, const ImageRegion<double>& image, const GraphBuilder<double>& builder);
+
 }  // namespace slam
 }  // namespace cge
