@@ -5,7 +5,7 @@
 //   cge_eval loops GT_LOOPS LOOPS_CSV [--tolerance 0.001]          loop precision and recall
 //                [--score cge_score|bow_score] [--min-score X]     detections need score >= X
 //                [--curve CSV [--force]]                           P-R over every threshold
-//   cge_eval map MAP.ot [--sequence DIR] [--image PNG]             semantic octree scores (docs/MAPS.md)
+//   cge_eval map MAP.ot [--sequence DIR [--trajectory TXT]] [--image PNG]  semantic octree scores (docs/MAPS.md)
 // GT and EST are TUM trajectories; ATE and RPE follow the TUM RGB-D benchmark tools.
 //
 // Output: one "name value" line per quantity on standard output (15 significant digits; "nan" for
@@ -90,6 +90,7 @@ struct Options {
   bool force = false;
   std::string map_ot;
   std::string map_sequence;
+  std::string map_trajectory;  // the map's trajectory (TUM): aligns the ghost set to the map's frame
   std::string map_image;
   std::size_t min_entity_voxels = 3;
 };
@@ -240,7 +241,18 @@ Values run_map(const Options& opt, nlohmann::ordered_json& inputs) {
               count("memory_bytes", tree->memoryUsage())};
   if (!opt.map_sequence.empty()) {
     inputs["sequence"] = opt.map_sequence;
-    const mp::GhostVoxels ghosts = mp::ghost_voxels_from_sequence(opt.map_sequence, voxels.resolution_m);
+    mp::GhostVoxelSettings ghost_settings;
+    if (!opt.map_trajectory.empty()) {
+      // A SLAM map lives in the run's frame: place the ghost set there (the ATE alignment).
+      inputs["trajectory"] = opt.map_trajectory;
+      const m::Trajectory gt =
+          read_trajectory((std::filesystem::path(opt.map_sequence) / "groundtruth.txt").string(), opt);
+      const m::AteResult ate = m::compute_ate(gt, read_trajectory(opt.map_trajectory, opt));
+      ghost_settings.T_map_world = ate.T_groundtruth_estimate.inverse();
+      v.push_back(real("trajectory_ate_rmse_m", ate.translation_m.rmse));
+    }
+    const mp::GhostVoxels ghosts =
+        mp::ghost_voxels_from_sequence(opt.map_sequence, voxels.resolution_m, ghost_settings);
     v.push_back(real("ghost_fraction", mp::ghost_fraction(voxels, ghosts)));
     v.push_back(count("ghost_set_voxels", ghosts.ghost.size()));
   }
@@ -405,6 +417,9 @@ int main(int argc, char** argv) {
   map->add_option(
       "--sequence", opt.map_sequence,
       "a synthetic sequence folder (cge_sim): also the fraction of occupied voxels on moving people's paths");
+  map->add_option("--trajectory", opt.map_trajectory,
+                  "with --sequence: the map's trajectory (TUM, e.g. cge_slam's trajectory.txt); the ghost set is "
+                  "moved into the map's frame by the ATE alignment to the sequence's groundtruth.txt");
   map->add_option("--image", opt.map_image, "write a top-view PNG of the occupied voxels (never overwritten)");
   map->add_option("--min-entity-voxels", opt.min_entity_voxels,
                   "smaller connected same-class parts are not integrity entities")

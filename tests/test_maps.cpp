@@ -36,6 +36,7 @@
 #include "cge/octomap/semantic_octree.hpp"
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
+#include "cge/sim/segmentation_error_model.hpp"
 #include "cge/sim/tum_writer.hpp"
 #include "temp_dir.hpp"
 
@@ -452,6 +453,80 @@ TEST_CASE("Semantic map: dynamic masks keep people out, ghost voxels only withou
                     << f.octree_memory_bytes);
 }
 
+TEST_CASE("Semantic map with segmentation errors: the grown dynamic region keeps the people out", "[maps]") {
+  // The scene's keyframes with the simulator's segmentation errors (masks eroded 2 px, feet lost in
+  // 20 % of frames, false positives; misses off, so every person has a mask to grow) instead of the
+  // exact masks. Oracle: the exact masks (person pixels that must be left out) and the ghost set.
+  const Scene& s = scene();
+  const cge::dataset::TumSequence seq(s.folder);
+  cge::sim::SegmentationErrorSettings errors;
+  errors.miss_probability = 0;
+  const cge::sim::SegmentationErrorModel model(s.instances, 7, errors);
+  std::vector<cge::slam::Keyframe> keyframes = s.keyframes;
+  int feet_cut = 0;
+  for (cge::slam::Keyframe& kf : keyframes) {
+    const cge::dataset::TumFrame f = seq.load(kf.frame_index);
+    const cv::Mat ids = cv::imread((s.folder / "masks" / (f.rgb_stem + ".png")).string(), cv::IMREAD_UNCHANGED);
+    const cge::sim::SegmentationResult r = model.apply(ids, kf.frame_index);
+    feet_cut += static_cast<int>(r.events.feet_cut_ids.size());
+    std::map<std::uint16_t, int> class_of;
+    for (const auto& i : r.instances) class_of[i.id] = i.class_id;
+    kf.class_labels = cv::Mat(ids.size(), CV_16UC1, cv::Scalar(0));
+    kf.dynamic_mask = cv::Mat(ids.size(), CV_8UC1, cv::Scalar(0));
+    for (int v = 0; v < ids.rows; ++v)
+      for (int u = 0; u < ids.cols; ++u) {
+        const std::uint16_t id = r.instance_labels.at<std::uint16_t>(v, u);
+        if (id == 0) continue;
+        kf.class_labels.at<std::uint16_t>(v, u) = static_cast<std::uint16_t>(class_of.at(id) + 1);
+        if (class_of.at(id) == 0) kf.dynamic_mask.at<std::uint8_t>(v, u) = 255;  // person: dynamic
+      }
+  }
+  CHECK(feet_cut > 0);
+
+  // Person pixels (exact masks) that a keyframe would still map, mask alone vs grown region.
+  const auto kept_person_pixels = [&](bool grow) {
+    cge::mapping::SemanticMapSettings settings;
+    settings.grow_dynamic_mask = grow;
+    settings.pixel_stride = settings.octree_pixel_stride = 1;
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < keyframes.size(); ++k) {
+      cge::slam::Keyframe probe = keyframes[k];
+      probe.class_labels = s.keyframes[k].dynamic_mask.clone();  // exact person pixels as label 255
+      probe.class_labels.convertTo(probe.class_labels, CV_16UC1);
+      for (const SemanticPoint& p : cge::mapping::SemanticMapBuilder(s.intrinsics, settings).keyframe_points(probe))
+        kept += p.class_label == 255;
+    }
+    return kept;
+  };
+  const std::size_t kept_mask = kept_person_pixels(false), kept_grown = kept_person_pixels(true);
+  WARN("person pixels still mapped: mask alone " << kept_mask << ", grown region " << kept_grown);
+  CHECK(kept_mask > 1000);
+  CHECK(kept_grown < kept_mask);
+
+  const cge::mapping::GhostVoxels ghosts = cge::mapping::ghost_voxels_from_sequence(s.folder, 0.05);
+  const auto ghost_count = [&](const OccupiedVoxels& map) {
+    return cge::mapping::ghost_fraction(map, ghosts) * static_cast<double>(map.voxels.size());
+  };
+  cge::mapping::SemanticMapSettings settings;
+  settings.grow_dynamic_mask = false;
+  cge::mapping::SemanticMapBuilder mask_only(s.intrinsics, settings);
+  mask_only.rebuild(keyframes);
+  const cge::mapping::SemanticMapBuilder grown = build(true, keyframes);
+  const cge::mapping::SemanticMapBuilder none = build(false, keyframes);
+  const double cloud_mask = ghost_count(cge::mapping::occupied_voxels_of_cloud(mask_only.cloud(), 0.05));
+  const double cloud_grown = ghost_count(cge::mapping::occupied_voxels_of_cloud(grown.cloud(), 0.05));
+  const double octree_none = ghost_count(none.occupied_voxels());
+  const double octree_grown = ghost_count(grown.occupied_voxels());
+  WARN("ghost voxels: octree none " << octree_none << ", mask only " << ghost_count(mask_only.occupied_voxels())
+                                    << ", grown " << octree_grown << "; cloud mask only " << cloud_mask << ", grown "
+                                    << cloud_grown);
+  // The 60-frame scene leaves the octree few ghosts to compare (the walking_xyz figures are in
+  // docs/MAPS.md); the cloud, which has no free space, shows the difference.
+  CHECK(octree_none > 0);
+  CHECK(octree_grown <= ghost_count(mask_only.occupied_voxels()));
+  CHECK(cloud_grown * 5 < cloud_mask);
+}
+
 TEST_CASE("Semantic map files: PLY, .ot and .bt read back, same bytes twice", "[maps]") {
   const Scene& s = scene();
   cge_test::TempDir dir("cge_maps_files");
@@ -590,6 +665,7 @@ TEST_CASE("Keyframe points: hand-worked back-projection, masks, range and colour
   settings.pixel_stride = 1;
   settings.octree_pixel_stride = 1;
   settings.max_range_m = 3;
+  settings.grow_dynamic_mask = false;  // the mask's pixels alone (the grown region: test_map_dynamic_region.cpp)
   cge::slam::Keyframe kf;
   kf.T_world_camera = Eigen::Translation3d(1, 2, 3) * Eigen::AngleAxisd(std::acos(-1.0) / 2, Eigen::Vector3d::UnitZ());
   // Pixels (u, v): (0,0) depth 1, chair; (1,0) depth 2, unlabelled; (0,1) depth 0 (invalid);

@@ -100,8 +100,9 @@ GhostVoxels ghost_voxels_from_sequence(const fs::path& folder, double resolution
                                   " is missing or not a 16-bit label image of the depth image's size");
     }
     const cv::Mat depth = frame.depth_metres();
-    const Eigen::Matrix3f R = it->T_world_camera.linear().cast<float>();
-    const Eigen::Vector3f t = it->T_world_camera.translation().cast<float>();
+    const Eigen::Isometry3d T_map_camera = settings.T_map_world * it->T_world_camera;
+    const Eigen::Matrix3f R = T_map_camera.linear().cast<float>();
+    const Eigen::Vector3f t = T_map_camera.translation().cast<float>();
     for (int v = 0; v < depth.rows; v += settings.pixel_stride) {
       const float* d = depth.ptr<float>(v);
       const std::uint16_t* l = labels.ptr<std::uint16_t>(v);

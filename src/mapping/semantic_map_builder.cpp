@@ -18,6 +18,7 @@ void check_settings(const SemanticMapSettings& s) {
   if (!(s.max_range_m > 0 && std::isfinite(s.max_range_m))) bad("max_range_m must be finite and > 0");
   if (!(s.cloud_voxel_m > 0 && std::isfinite(s.cloud_voxel_m))) bad("cloud_voxel_m must be finite and > 0");
   if (s.min_entity_points < 1) bad("min_entity_points must be >= 1");
+  check_settings(s.dynamic_region);
   octomap_adapter::check_settings(s.octree);
 }
 
@@ -43,6 +44,14 @@ SemanticMapBuilder::SemanticMapBuilder(const PinholeIntrinsics<double>& intrinsi
 }
 
 std::vector<SemanticPoint> SemanticMapBuilder::keyframe_points(const slam::Keyframe& kf, bool octree_grid) const {
+  std::vector<SemanticPoint> points;
+  back_project(kf, octree_grid ? settings_.octree_pixel_stride : settings_.pixel_stride, points, nullptr, nullptr);
+  return points;
+}
+
+void SemanticMapBuilder::back_project(const slam::Keyframe& kf, int stride, std::vector<SemanticPoint>& points,
+                                      std::vector<Eigen::Vector3f>* octree_positions,
+                                      std::vector<std::uint16_t>* octree_labels) const {
   if (kf.depth_m.empty()) {
     throw std::invalid_argument("SemanticMapBuilder: keyframe " + std::to_string(kf.id) + " has no depth_m image");
   }
@@ -66,13 +75,19 @@ std::vector<SemanticPoint> SemanticMapBuilder::keyframe_points(const slam::Keyfr
   const float fx = static_cast<float>(intrinsics_.fx_px), fy = static_cast<float>(intrinsics_.fy_px);
   const float cx = static_cast<float>(intrinsics_.cx_px), cy = static_cast<float>(intrinsics_.cy_px);
   const float max_range = static_cast<float>(settings_.max_range_m);
+  const cv::Mat leave_out = !has_mask ? cv::Mat()
+                            : settings_.grow_dynamic_mask
+                                ? dynamic_region(kf.dynamic_mask, kf.depth_m, settings_.dynamic_region)
+                                : kf.dynamic_mask;
 
-  std::vector<SemanticPoint> points;
-  const int stride = octree_grid ? settings_.octree_pixel_stride : settings_.pixel_stride;
+  points.clear();
+  points.reserve(static_cast<std::size_t>((size.height + stride - 1) / stride) *
+                 static_cast<std::size_t>((size.width + stride - 1) / stride));
+  const int octree_stride = settings_.octree_pixel_stride;  // a multiple of stride when octree_positions is set
   for (int v = 0; v < size.height; v += stride) {
     const float* depth = kf.depth_m.ptr<float>(v);
     const std::uint16_t* labels = has_labels ? kf.class_labels.ptr<std::uint16_t>(v) : nullptr;
-    const std::uint8_t* mask = has_mask ? kf.dynamic_mask.ptr<std::uint8_t>(v) : nullptr;
+    const std::uint8_t* mask = has_mask ? leave_out.ptr<std::uint8_t>(v) : nullptr;
     const cv::Vec3b* bgr = has_bgr ? kf.bgr.ptr<cv::Vec3b>(v) : nullptr;
     for (int u = 0; u < size.width; u += stride) {
       const float z = depth[u];
@@ -86,13 +101,20 @@ std::vector<SemanticPoint> SemanticMapBuilder::keyframe_points(const slam::Keyfr
         p.colour = settings_.colour_unlabelled_from_image ? Rgb8{bgr[u][2], bgr[u][1], bgr[u][0]} : kOtherClassColour;
       }
       points.push_back(p);
+      if (octree_positions && v % octree_stride == 0 && u % octree_stride == 0) {
+        octree_positions->push_back(p.position_m);
+        octree_labels->push_back(p.class_label);
+      }
     }
   }
-  return points;
 }
 
 void SemanticMapBuilder::insert(const slam::Keyframe& kf) {
-  const std::vector<SemanticPoint> points = keyframe_points(kf);
+  // One pass: the cloud's points (pixel_stride) and among them the octree's (octree_pixel_stride).
+  std::vector<SemanticPoint> points;
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<std::uint16_t> labels;
+  back_project(kf, settings_.pixel_stride, points, &positions, &labels);
 
   // Entities: per class label present, the voxel box (octree resolution) of its points.
   struct Box {
@@ -100,10 +122,6 @@ void SemanticMapBuilder::insert(const slam::Keyframe& kf) {
     int count = 0;
   };
   std::map<std::uint16_t, Box> boxes;
-  std::vector<Eigen::Vector3f> positions;
-  std::vector<std::uint16_t> labels;
-  positions.reserve(points.size());
-  labels.reserve(points.size());
   for (const SemanticPoint& p : points) {
     Rgb8 preset;
     if (!preset_colour_of_label(p.class_label, preset)) continue;  // the octree keeps no class for it
@@ -122,12 +140,6 @@ void SemanticMapBuilder::insert(const slam::Keyframe& kf) {
     entities_.push_back(IntegrityEntity{b.first, b.second.lo, b.second.hi});
   }
 
-  positions.clear();
-  labels.clear();
-  for (const SemanticPoint& p : keyframe_points(kf, true)) {
-    positions.push_back(p.position_m);
-    labels.push_back(p.class_label);
-  }
   octree_.insert_scan(kf.T_world_camera.translation(), positions, labels);
   const std::vector<SemanticPoint> filtered = voxel_filter(points, settings_.cloud_voxel_m);
   filtered_points_.insert(filtered_points_.end(), filtered.begin(), filtered.end());

@@ -14,6 +14,8 @@
 #include <filesystem>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "cge/mapping/map_voxel.hpp"
 #include "cge/mapping/semantic_point.hpp"
 
@@ -23,6 +25,10 @@ namespace mapping {
 struct GhostVoxelSettings {
   int pixel_stride = 1;                 ///< use every n-th pixel along rows and columns, >= 1
   double max_time_difference_s = 1e-3;  ///< largest gap between a frame and its ground-truth pose, seconds
+  /// The map's frame from the ground truth's world frame: the ghost set is placed where a map built
+  /// in another frame (a SLAM run starts at its first camera) has it; e.g. the inverse of the
+  /// trajectory alignment T_groundtruth_estimate of cge::metrics::compute_ate. Identity: ground-truth poses.
+  Eigen::Isometry3d T_map_world = Eigen::Isometry3d::Identity();
 };
 
 struct GhostVoxels {

@@ -3,9 +3,9 @@
 // keyframes (ALGORITHMS.md section 8; docs/MAPS.md).
 //
 // Per keyframe: every `pixel_stride`-th pixel with valid depth in (0, max_range_m], outside the
-// dynamic mask, is back-projected with the keyframe's pose T_world_camera. The cloud keeps these
-// points voxel-filtered per keyframe (cloud_voxel_m) and once more over all keyframes on request
-// (cloud()); the octree gets them as one scan from the camera centre. Because poses change after
+// dynamic region (the dynamic mask grown by dynamic_region()), is back-projected with the keyframe's pose
+// T_world_camera. The cloud keeps these points voxel-filtered per keyframe (cloud_voxel_m) and once more over all
+// keyframes on request (cloud()); the octree gets them as one scan from the camera centre. Because poses change after
 // loop closure, rebuild(keyframes) clears both and inserts every keyframe again.
 //
 // Needs Keyframe::depth_m (CV_32FC1), and uses bgr (CV_8UC3, for colour_unlabelled_from_image),
@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "cge/core/pinhole_intrinsics.hpp"
+#include "cge/mapping/map_dynamic_region.hpp"
 #include "cge/mapping/map_voxel.hpp"
 #include "cge/mapping/semantic_integrity.hpp"
 #include "cge/mapping/semantic_point.hpp"
@@ -38,6 +39,10 @@ struct SemanticMapSettings {
   double max_range_m = 4.0;      ///< depth beyond this is not used (sensor noise grows with range), metres
   double cloud_voxel_m = 0.02;   ///< voxel filter of the dense cloud, metres, > 0
   bool use_dynamic_mask = true;  ///< leave out pixels of Keyframe::dynamic_mask (false: map everything)
+  /// Leave out the mask's dynamic_region() (rim, depth band of each instance: what a segmenter
+  /// missed) instead of the mask's pixels alone. Only with use_dynamic_mask.
+  bool grow_dynamic_mask = true;
+  DynamicRegionSettings dynamic_region;  ///< how the mask grows (map_dynamic_region.hpp)
   /// Colour of the cloud's points without a preset class colour: false = grey, true = the image's
   /// colour. (The octree always uses grey for them: its colours carry the class.)
   bool colour_unlabelled_from_image = false;
@@ -93,6 +98,11 @@ class SemanticMapBuilder {
   const PinholeIntrinsics<double>& intrinsics() const { return intrinsics_; }
 
  private:
+  /// keyframe_points() at `stride` into `points`; with octree_positions set, also the points on the
+  /// octree_pixel_stride grid (positions and labels), from the same pass.
+  void back_project(const slam::Keyframe& keyframe, int stride, std::vector<SemanticPoint>& points,
+                    std::vector<Eigen::Vector3f>* octree_positions, std::vector<std::uint16_t>* octree_labels) const;
+
   PinholeIntrinsics<double> intrinsics_;
   SemanticMapSettings settings_;
   octomap_adapter::SemanticOctree octree_;

@@ -3,7 +3,8 @@
 // per occupied voxel (ALGORITHMS.md section 8). OctoMap + core only.
 //
 // Each scan is a set of world points seen from one camera origin, integrated as OctoMap's
-// insertPointCloud(discretize) does, with OctoMap's ray caster (computeRayKeys) and updateNode:
+// insertPointCloud(discretize) does, with OctoMap's ray caster (computeRayKeys) and its updateNode
+// rule (applied in one depth-first walk over the scan's cells in Morton order, see update_leaves):
 // voxels on the rays from the origin get a miss, the voxels of the points (within max range) a hit,
 // L(n | z_1:t+1) = L(n | z_1:t) + L(n | z_t+1), clamped; a cell is updated once per scan, hits win.
 // To save time, free space is carved by one ray per block of ray_block_voxels^3 end voxels.
@@ -13,14 +14,13 @@
 // never averaged: the tree is updated lazily and never pruned here, because OctoMap's pruning of a
 // ColorOcTree averages children's colours.
 //
-// Determinism: no threads; OctoMap updates each node at most once per scan, so the order in which it
-// walks its hash sets does not change the values; votes live in an ordered map. Same scans, same
-// bytes in .ot and .bt.
+// Determinism: no threads; each node is updated at most once per scan, cells and votes are kept in
+// sorted vectors. Same scans, same bytes in .ot and .bt.
 
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
-#include <map>
+#include <iterator>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -160,18 +160,8 @@ class SemanticOctree {
     std::sort(far_ends.begin(), far_ends.end());
     far_ends.erase(std::unique(far_ends.begin(), far_ends.end()), far_ends.end());
 
-    // Free cells: rays to one end voxel per block (hits and truncated ends alike).
-    octomap::KeySet free_cells;
-    octomap::KeyRay ray;
-    std::uint64_t last_block = ~std::uint64_t(0);
-    const auto cast_to = [&](std::uint64_t packed_key) {
-      const std::uint64_t block = block_of(packed_key);
-      if (block == last_block) return;
-      last_block = block;
-      if (tree_->computeRayKeys(origin, tree_->keyToCoord(unpack(packed_key)), ray)) {
-        free_cells.insert(ray.begin(), ray.end());
-      }
-    };
+    // Free cells: rays to one end voxel per block, the block's first in packed key order (hits and
+    // truncated ends alike), collected as Morton codes, sorted and made unique.
     std::vector<std::uint64_t> ends;
     ends.reserve(keyed.size() + far_ends.size());
     for (std::size_t i = 0; i < keyed.size(); ++i) {
@@ -182,53 +172,46 @@ class SemanticOctree {
     std::vector<std::pair<std::uint64_t, std::uint64_t>> by_block(ends.size());  // (block, key): first key per block
     for (std::size_t i = 0; i < ends.size(); ++i) by_block[i] = {block_of(ends[i]), ends[i]};
     std::sort(by_block.begin(), by_block.end());
-    for (const auto& bk : by_block) cast_to(bk.second);
+    free_codes_.clear();
+    for (std::size_t i = 0; i < by_block.size(); ++i) {
+      if (i > 0 && by_block[i].first == by_block[i - 1].first) continue;
+      if (tree_->computeRayKeys(origin, tree_->keyToCoord(unpack(by_block[i].second)), ray_)) {
+        for (const octomap::OcTreeKey& k : ray_) free_codes_.push_back(morton(k));
+      }
+    }
+    sort_unique(free_codes_);
 
-    // Log-odds updates: each cell once per scan, hits win over misses; the hits below, with the votes.
-    for (std::size_t i = 0; i < hit_count; ++i) free_cells.erase(unpack(ends[i]));
-    for (const octomap::OcTreeKey& k : free_cells) tree_->updateNode(k, false, /*lazy_eval=*/true);
+    // Hits: Morton code and label, ascending; the end voxels' codes.
+    hit_votes_.resize(keyed.size());
+    for (std::size_t i = 0; i < keyed.size(); ++i) {
+      hit_votes_[i] = Vote{morton(unpack(keyed[i].first)), keyed[i].second, 1};
+    }
+    std::sort(hit_votes_.begin(), hit_votes_.end(), vote_less);
+    hit_codes_.resize(hit_count);
+    for (std::size_t i = 0; i < hit_count; ++i) hit_codes_[i] = morton(unpack(ends[i]));
+    std::sort(hit_codes_.begin(), hit_codes_.end());
+
+    // Log-odds updates: each cell once per scan, hits win over misses.
+    misses_.clear();
+    std::set_difference(free_codes_.begin(), free_codes_.end(), hit_codes_.begin(), hit_codes_.end(),
+                        std::back_inserter(misses_));
+    update_leaves(misses_, tree_->getProbMissLog(), [](octomap::ColorOcTreeNode*, std::size_t) {});
     inner_stale_ = true;
 
-    for (std::size_t i = 0; i < keyed.size();) {
-      const std::uint64_t key = keyed[i].first;
-      std::vector<std::pair<std::uint16_t, std::uint32_t>>& votes = votes_[key];
-      std::size_t j = i;
-      while (j < keyed.size() && keyed[j].first == key) {
-        const std::uint16_t label = keyed[j].second;
-        std::uint32_t n = 0;
-        for (; j < keyed.size() && keyed[j].first == key && keyed[j].second == label; ++j) ++n;
-        const auto v = std::find_if(votes.begin(), votes.end(), [label](const auto& e) { return e.first == label; });
-        if (v == votes.end()) {
-          votes.emplace_back(label, n);
-        } else {
-          v->second += n;
-        }
-      }
-      std::uint16_t best = votes.front().first;
-      std::uint32_t best_count = 0;
-      for (const auto& v : votes) {
-        if (v.second > best_count || (v.second == best_count && v.first < best)) {
-          best = v.first;
-          best_count = v.second;
-        }
-      }
-      if (octomap::ColorOcTreeNode* node = tree_->updateNode(unpack(key), true, /*lazy_eval=*/true)) {
-        const mapping::Rgb8 c = mapping::class_colour(best);
-        node->setColor(c.r, c.g, c.b);
-      }
-      i = j;
-    }
+    // Votes: merge this scan's (code, label, points) into votes_; the colour of each hit voxel is the
+    // preset colour of its label with the most votes (ties: the smaller label).
+    std::vector<std::uint16_t> best = merge_votes();
+    update_leaves(hit_codes_, tree_->getProbHitLog(), [&](octomap::ColorOcTreeNode* node, std::size_t i) {
+      const mapping::Rgb8 c = mapping::class_colour(best[i]);
+      node->setColor(c.r, c.g, c.b);
+    });
   }
 
   /// The occupied voxels with their colours and classes.
   mapping::OccupiedVoxels occupied_voxels() const { return octomap_adapter::occupied_voxels(*tree_); }
 
   /// OctoMap's memoryUsage() of the tree plus the class votes, bytes.
-  std::size_t memory_bytes() const {
-    std::size_t votes = 0;
-    for (const auto& v : votes_) votes += sizeof(v) + 3 * sizeof(void*) + v.second.capacity() * sizeof(v.second[0]);
-    return tree_->memoryUsage() + votes;
-  }
+  std::size_t memory_bytes() const { return tree_->memoryUsage() + votes_.capacity() * sizeof(Vote); }
   std::size_t tree_memory_bytes() const { return tree_->memoryUsage(); }
 
   /// The ColorOcTree (.ot, opened by octovis). Throws std::invalid_argument when the file exists and
@@ -295,11 +278,147 @@ class SemanticOctree {
     inner_stale_ = false;
   }
 
+  /// Points of one class label seen in one end voxel (Morton code) over all scans.
+  struct Vote {
+    std::uint64_t code;
+    std::uint16_t label;
+    std::uint32_t points;
+  };
+  static bool vote_less(const Vote& a, const Vote& b) { return a.code != b.code ? a.code < b.code : a.label < b.label; }
+
+  /// The key's Morton code: bit l of key[0], key[1], key[2] at bits 3l, 3l + 1, 3l + 2, so that
+  /// (code >> 3l) & 7 is the child index OctoMap takes at level l and ascending codes walk the tree
+  /// depth first.
+  static std::uint64_t morton(const octomap::OcTreeKey& k) {
+    const auto spread = [](std::uint64_t x) {  // 16 bits to every third bit
+      x = (x | (x << 16)) & 0x0000FF0000FFull;
+      x = (x | (x << 8)) & 0x00F00F00F00Full;
+      x = (x | (x << 4)) & 0x0C30C30C30C3ull;
+      x = (x | (x << 2)) & 0x249249249249ull;
+      return x;
+    };
+    return spread(k[0]) | (spread(k[1]) << 1) | (spread(k[2]) << 2);
+  }
+  static octomap::OcTreeKey key_of_morton(std::uint64_t m) {
+    const auto compact = [](std::uint64_t x) {
+      x &= 0x249249249249ull;
+      x = (x | (x >> 2)) & 0x0C30C30C30C3ull;
+      x = (x | (x >> 4)) & 0x00F00F00F00Full;
+      x = (x | (x >> 8)) & 0x0000FF0000FFull;
+      x = (x | (x >> 16)) & 0xFFFFull;
+      return static_cast<octomap::key_type>(x);
+    };
+    return octomap::OcTreeKey(compact(m), compact(m >> 1), compact(m >> 2));
+  }
+
+  /// Sorts 48-bit codes and removes repeats: a least-significant-digit radix sort (3 passes of 16 bits).
+  void sort_unique(std::vector<std::uint64_t>& codes) {
+    radix_buffer_.resize(codes.size());
+    std::vector<std::size_t> count(1u << 16);
+    for (int shift = 0; shift < 48; shift += 16) {
+      std::fill(count.begin(), count.end(), 0);
+      for (const std::uint64_t c : codes) ++count[(c >> shift) & 0xffffu];
+      std::size_t sum = 0;
+      for (std::size_t& n : count) sum += std::exchange(n, sum);
+      for (const std::uint64_t c : codes) radix_buffer_[count[(c >> shift) & 0xffffu]++] = c;
+      codes.swap(radix_buffer_);
+    }
+    codes.erase(std::unique(codes.begin(), codes.end()), codes.end());
+  }
+
+  /// Adds `log_odds` to every leaf whose Morton code is in `codes` (ascending, unique), exactly as
+  /// updateNode(key, log_odds, lazy_eval = true) would key by key (OctoMap 1.9: create missing
+  /// children, expand a pruned leaf, add and clamp), but walking the tree once in depth-first order:
+  /// consecutive codes share the path above their first different child index. Calls
+  /// on_leaf(leaf, index in codes) after each update.
+  template <typename OnLeaf>
+  void update_leaves(const std::vector<std::uint64_t>& codes, float log_odds, OnLeaf&& on_leaf) {
+    if (codes.empty()) return;
+    std::size_t first = 0;
+    if (tree_->getRoot() == nullptr) {  // only updateNode can create the root
+      on_leaf(tree_->updateNode(key_of_morton(codes[0]), log_odds, /*lazy_eval=*/true), 0);
+      first = 1;
+    }
+    const int depth = static_cast<int>(tree_->getTreeDepth());
+    std::vector<octomap::ColorOcTreeNode*> path(static_cast<std::size_t>(depth) + 1, nullptr);
+    std::vector<char> created(static_cast<std::size_t>(depth) + 1, 0);
+    path[0] = tree_->getRoot();
+    std::uint64_t previous = 0;
+    for (std::size_t i = first; i < codes.size(); ++i) {
+      const std::uint64_t code = codes[i];
+      int d = 0;  // the first depth whose child index differs from the previous code's
+      if (i > first) {
+        const std::uint64_t diff = code ^ previous;
+        int top_bit = 3 * depth - 1;
+        while (!((diff >> top_bit) & 1u)) --top_bit;
+        d = depth - 1 - top_bit / 3;
+      }
+      for (; d < depth; ++d) {
+        octomap::ColorOcTreeNode* node = path[static_cast<std::size_t>(d)];
+        const unsigned pos = static_cast<unsigned>((code >> (3 * (depth - 1 - d))) & 7u);
+        bool made = false;
+        if (!tree_->nodeChildExists(node, pos)) {
+          if (!tree_->nodeHasChildren(node) && !created[static_cast<std::size_t>(d)]) {
+            tree_->expandNode(node);
+          } else {
+            tree_->createNodeChild(node, pos);
+            made = true;
+          }
+        }
+        path[static_cast<std::size_t>(d) + 1] = tree_->getNodeChild(node, pos);
+        created[static_cast<std::size_t>(d) + 1] = made;
+      }
+      octomap::ColorOcTreeNode* leaf = path[static_cast<std::size_t>(depth)];
+      tree_->updateNodeLogOdds(leaf, log_odds);
+      on_leaf(leaf, i);
+      previous = code;
+    }
+  }
+
+  /// Merges hit_votes_ (one vote per point, sorted by vote_less) into votes_ and returns, for each
+  /// code of hit_codes_, the label with the most points over all scans so far (ties: the smaller).
+  std::vector<std::uint16_t> merge_votes() {
+    merged_.clear();
+    merged_.reserve(votes_.size() + hit_votes_.size());
+    std::size_t a = 0, b = 0;
+    while (a < votes_.size() || b < hit_votes_.size()) {
+      if (b == hit_votes_.size() || (a < votes_.size() && vote_less(votes_[a], hit_votes_[b]))) {
+        merged_.push_back(votes_[a++]);
+      } else if (a == votes_.size() || vote_less(hit_votes_[b], votes_[a])) {
+        merged_.push_back(hit_votes_[b++]);
+      } else {
+        merged_.push_back(votes_[a++]);
+      }
+      while (b < hit_votes_.size() && hit_votes_[b].code == merged_.back().code &&
+             hit_votes_[b].label == merged_.back().label) {
+        merged_.back().points += hit_votes_[b++].points;
+      }
+    }
+    votes_.swap(merged_);
+    std::vector<std::uint16_t> best(hit_codes_.size(), 0);
+    std::size_t v = 0;
+    for (std::size_t i = 0; i < hit_codes_.size(); ++i) {
+      while (votes_[v].code < hit_codes_[i]) ++v;
+      std::uint32_t most = 0;
+      for (; v < votes_.size() && votes_[v].code == hit_codes_[i]; ++v) {
+        if (votes_[v].points > most) {  // labels ascend: a later label wins only with strictly more
+          most = votes_[v].points;
+          best[i] = votes_[v].label;
+        }
+      }
+    }
+    return best;
+  }
+
   SemanticOctreeSettings settings_;
   std::unique_ptr<octomap::ColorOcTree> tree_;
-  /// Per end voxel (packed key, ordered): (label, points) pairs, in first-seen order.
-  std::map<std::uint64_t, std::vector<std::pair<std::uint16_t, std::uint32_t>>> votes_;
+  /// Per end voxel and label (sorted by vote_less): points over all scans.
+  std::vector<Vote> votes_;
   bool inner_stale_ = false;
+  // Buffers reused from scan to scan (their contents do not outlive insert_scan).
+  octomap::KeyRay ray_;
+  std::vector<std::uint64_t> free_codes_, hit_codes_, misses_, radix_buffer_;
+  std::vector<Vote> hit_votes_, merged_;
 };
 
 }  // namespace octomap_adapter
