@@ -139,8 +139,8 @@ def walking_runs(runner: Runner, plan: Plan) -> dict:
                        "--aligned-out", aligned, "--force")
             run["aligned"] = read_csv(aligned)
             if map_flags:
-                run["map_eval"] = runner.run("cge_eval", "map", out / "map.ot", "--sequence", sequence, "--json",
-                                             capture_json=True)
+                run["map_eval"] = runner.run("cge_eval", "map", out / "map.ot", "--sequence", sequence, "--trajectory",
+                                             out / "trajectory.txt", "--json", capture_json=True)
             runs[(preset, mode)] = run
             print(f"  {preset:20s} {mode:4s} ate {fmt_m(summary.get('ate', {}).get('rmse_m'))}", flush=True)
     return runs
