@@ -97,13 +97,13 @@ Tracker::Tracker(const TrackerSettings& settings, const PinholeIntrinsics<double
       orb_scale_factor_(orb_scale_factor),
       refiner_(settings.refinement) {}
 
-std::vector<std::int64_t> Tracker::local_map_points(const Map& map) const {
+std::vector<std::int64_t> Tracker::local_map_points(const Map& map, int centre) const {
   std::set<int> keyframes;
   const int n = map.keyframe_count();
   for (int id = std::max(0, n - settings_.local_recent_keyframes); id < n; ++id) keyframes.insert(id);
-  if (reference_keyframe_ >= 0 && reference_keyframe_ < n) {
-    keyframes.insert(reference_keyframe_);
-    for (const int id : map.covisible_keyframes(reference_keyframe_, settings_.local_covisible_keyframes)) {
+  if (centre >= 0 && centre < n) {
+    keyframes.insert(centre);
+    for (const int id : map.covisible_keyframes(centre, settings_.local_covisible_keyframes)) {
       keyframes.insert(id);
     }
   }
@@ -221,16 +221,10 @@ bool Tracker::refine_with_local_map(const Frame& frame, const Map& map, const st
   return refine_pose(frame, map, matches, T_initial, settings_.min_inliers, out);
 }
 
-bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction,
-                              Attempt& out) const {
-  const std::vector<std::int64_t> points = local_map_points(map);
+bool Tracker::track_with_radius(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
+                                const Eigen::Isometry3d& prediction, double radius_px, Attempt& out) const {
   std::vector<std::int64_t> matches;
-  int found = match_by_projection(frame, map, points, prediction, settings_.search_radius_px, matches);
-  if (found < settings_.min_matches) {
-    found = match_by_projection(frame, map, points, prediction,
-                                settings_.search_radius_px * settings_.wide_search_factor, matches);
-  }
-  if (found < settings_.min_matches) return false;
+  if (match_by_projection(frame, map, points, prediction, radius_px, matches) < settings_.min_matches) return false;
   // RANSAC on the matches of the prediction, then the matches of that pose refined (the second
   // search finds the points the prediction missed).
   Eigen::Isometry3d T_ransac;
@@ -238,6 +232,17 @@ bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::I
   if ((T_ransac.translation() - prediction.translation()).norm() > settings_.max_jump_m) return false;
   if (!refine_with_local_map(frame, map, points, T_ransac, out)) return false;
   return (out.T_world_camera.translation() - prediction.translation()).norm() <= settings_.max_jump_m;
+}
+
+bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction,
+                              Attempt& out) const {
+  const std::vector<std::int64_t> points = local_map_points(map, reference_keyframe_);
+  if (track_with_radius(frame, map, points, prediction, settings_.search_radius_px, out)) return true;
+  // A prediction off by more than the window still finds enough matches on repeated texture, most
+  // of them wrong: retry on the failure itself, not only on a low match count.
+  out = Attempt{};
+  return track_with_radius(frame, map, points, prediction, settings_.search_radius_px * settings_.wide_search_factor,
+                           out);
 }
 
 bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const {
@@ -249,9 +254,21 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
   cv::Mat query(static_cast<int>(query_index.size()), frame.descriptors.cols, frame.descriptors.type());
   for (std::size_t q = 0; q < query_index.size(); ++q)
     frame.descriptors.row(query_index[q]).copyTo(query.row(static_cast<int>(q)));
-  cv::BFMatcher matcher(cv::NORM_HAMMING);
+  // Candidates: the source's (anywhere in the map, best first), then the last keyframes, each once.
   const int n = map.keyframe_count();
+  std::vector<int> candidates;
+  if (candidate_source_) {
+    for (const int id : candidate_source_(frame)) {
+      if (id < 0 || id >= n) continue;
+      if (static_cast<int>(candidates.size()) >= settings_.relocalisation_candidates) break;
+      candidates.push_back(id);
+    }
+  }
   for (int id = n - 1; id >= std::max(0, n - settings_.relocalisation_keyframes); --id) {
+    if (std::find(candidates.begin(), candidates.end(), id) == candidates.end()) candidates.push_back(id);
+  }
+  cv::BFMatcher matcher(cv::NORM_HAMMING);
+  for (const int id : candidates) {
     const Keyframe& kf = map.keyframe(id);
     std::vector<std::int64_t> train_point;
     cv::Mat train;
@@ -276,7 +293,8 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
     Eigen::Isometry3d T_ransac;
     if (!ransac_pose(frame, map, matches, settings_.min_relocalisation_inliers, T_ransac)) continue;
     Attempt local;
-    if (!refine_with_local_map(frame, map, local_map_points(map), T_ransac, local)) continue;
+    // The local map around the candidate: an old place's points are not in the current one.
+    if (!refine_with_local_map(frame, map, local_map_points(map, id), T_ransac, local)) continue;
     if (local.inliers < settings_.min_relocalisation_inliers) continue;
     out = std::move(local);
     return true;
@@ -292,7 +310,7 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
     for (int i = 0; i < frame.size(); ++i) usable += frame.is_static(i) && frame.has_depth(i);
     if (usable < settings_.min_initial_points) return result;  // lost: not enough to start a map
     result.state = TrackingState::initialised;
-    has_last_ = true;
+    last_has_pose_ = true;
     T_world_last_ = Eigen::Isometry3d::Identity();
     T_last_current_velocity_ = Eigen::Isometry3d::Identity();
     return result;
@@ -307,10 +325,15 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
   }
   if (!ok) {
     T_last_current_velocity_ = Eigen::Isometry3d::Identity();  // the motion model is stale now
+    last_has_pose_ = false;
     return result;
   }
-  T_last_current_velocity_ = state == TrackingState::tracked ? T_world_last_.inverse() * attempt.T_world_camera
-                                                             : Eigen::Isometry3d::Identity();
+  // The motion since the previous frame is known whenever that frame had a pose, relocalised or
+  // not (resetting it after every relocalisation predicted a standing camera, one frame's motion
+  // off, and failed again at the next frame).
+  T_last_current_velocity_ =
+      last_has_pose_ ? T_world_last_.inverse() * attempt.T_world_camera : Eigen::Isometry3d::Identity();
+  last_has_pose_ = true;
   T_world_last_ = attempt.T_world_camera;
   result.state = state;
   result.T_world_camera = attempt.T_world_camera;

@@ -3,8 +3,12 @@
 // constant-velocity prediction; projection of the local map's points (those seen by the last
 // keyframes and by the reference keyframe's covisible ones) into the frame and matching to its
 // static keypoints by descriptor in a window; PnP with RANSAC on the matches; refinement by
-// minimising reprojection error on the inliers; a quality check. When it fails: relocalisation
-// against the last keyframes (descriptor matching + PnP), else the frame is reported lost. The
+// minimising reprojection error on the inliers; a quality check. A failure at the normal search
+// radius is retried once with the wide radius (a wrong prediction gives enough matches, most of
+// them wrong, so the count alone does not reveal it). When both fail: relocalisation against
+// candidate keyframes (descriptor matching + PnP, then the local map around the candidate): the
+// last keyframes and, when a candidate source is set (the System's bag-of-words database), the
+// keyframes most alike anywhere in the map, as ORB-SLAM2 does; else the frame is reported lost. The
 // first frame (empty map) is reported `initialised` at the identity pose: the System makes it the
 // first keyframe with map points from depth (RGB-D needs no two-view initialisation).
 //
@@ -14,6 +18,7 @@
 // Deterministic: cv::solvePnPRansac draws from its own fixed-seed generator, matching visits map
 // points and keypoints in id order, Ceres runs single-threaded.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -63,6 +68,11 @@ class Tracker {
   void set_reference_keyframe(int keyframe_id) { reference_keyframe_ = keyframe_id; }
   int reference_keyframe() const { return reference_keyframe_; }
 
+  /// Relocalisation candidates beyond the last keyframes: keyframe ids, most promising first
+  /// (e.g. by bag-of-words score over all keyframes). Called only when tracking has failed.
+  using CandidateSource = std::function<std::vector<int>(const Frame& frame)>;
+  void set_relocalisation_candidates(CandidateSource source) { candidate_source_ = std::move(source); }
+
   /// The map was corrected (loop closure): the last tracked pose moves with it, so the next
   /// prediction lands in the corrected map. T_corrected_old maps old world coordinates to new ones.
   void apply_map_correction(const Eigen::Isometry3d& T_corrected_old) {
@@ -84,13 +94,19 @@ class Tracker {
                    const Eigen::Isometry3d& T_initial, int min_inliers, Attempt& out) const;
   bool refine_with_local_map(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
                              const Eigen::Isometry3d& T_initial, Attempt& out) const;
-  std::vector<std::int64_t> local_map_points(const Map& map) const;
+  /// Points of the local map around keyframe `centre` (-1: none): the last keyframes, the centre
+  /// and its most covisible keyframes.
+  std::vector<std::int64_t> local_map_points(const Map& map, int centre) const;
+  bool track_with_radius(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
+                         const Eigen::Isometry3d& prediction, double radius_px, Attempt& out) const;
 
   TrackerSettings settings_;
   PinholeIntrinsics<double> intrinsics_;
   double orb_scale_factor_;
   PoseRefiner refiner_;
-  bool has_last_ = false;
+  CandidateSource candidate_source_;
+  /// The previous frame had a pose: the frame-to-frame motion is known (else the last pose is stale).
+  bool last_has_pose_ = false;
   Eigen::Isometry3d T_world_last_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_last_current_velocity_ = Eigen::Isometry3d::Identity();  ///< last frame-to-frame motion
   int reference_keyframe_ = -1;
