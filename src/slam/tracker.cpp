@@ -160,13 +160,26 @@ int Tracker::match_by_projection(const Frame& frame, const Map& map, const std::
 
 bool Tracker::ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches, int min_inliers,
                           Eigen::Isometry3d& T_world_camera) const {
-  std::vector<cv::Point3d> object;
-  std::vector<cv::Point2d> image;
+  std::vector<int> keypoints;
+  std::vector<Eigen::Vector3d> points_world;
   for (std::size_t i = 0; i < matches.size(); ++i) {
     if (matches[i] < 0) continue;
-    const Eigen::Vector3d& X = map.map_point(matches[i]).position_world;
+    keypoints.push_back(static_cast<int>(i));
+    points_world.push_back(map.map_point(matches[i]).position_world);
+  }
+  return ransac_pose(frame, keypoints, points_world, min_inliers, T_world_camera);
+}
+
+bool Tracker::ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
+                          const std::vector<Eigen::Vector3d>& points_world, int min_inliers,
+                          Eigen::Isometry3d& T_world_camera) const {
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  for (std::size_t k = 0; k < keypoints.size(); ++k) {
+    const Eigen::Vector3d& X = points_world[k];
+    const cv::Point2f& uv = frame.keypoints[static_cast<std::size_t>(keypoints[k])].pt;
     object.emplace_back(X.x(), X.y(), X.z());
-    image.emplace_back(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
+    image.emplace_back(uv.x, uv.y);
   }
   if (static_cast<int>(object.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
   const cv::Matx33d K(intrinsics_.fx_px, 0, intrinsics_.cx_px, 0, intrinsics_.fy_px, intrinsics_.cy_px, 0, 0, 1);
@@ -245,6 +258,107 @@ bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::I
                            out);
 }
 
+bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction,
+                               Attempt& out) const {
+  if (last_keypoints_.empty()) return false;
+  // Projection matching of the previous frame's static keypoints with depth (temporary points, as
+  // ORB-SLAM2's RGB-D motion model does) within the wide window: one frame of motion at most.
+  const KeypointGrid grid(frame);
+  const Eigen::Isometry3d T_camera_world = prediction.inverse();
+  const double radius_px = settings_.search_radius_px * settings_.wide_search_factor;
+  std::vector<int> best_distance(static_cast<std::size_t>(frame.size()), INT_MAX);
+  std::vector<int> source(static_cast<std::size_t>(frame.size()), -1);
+  for (std::size_t k = 0; k < last_keypoints_.size(); ++k) {
+    const Eigen::Vector3d p_world = T_world_last_ * last_points_camera_m_[k];
+    const Eigen::Vector3d p_camera = T_camera_world * p_world;
+    if (p_camera.z() < kMinPointDepthM) continue;
+    const Eigen::Vector2d uv = intrinsics_.project(p_camera);
+    int best = INT_MAX, second = INT_MAX, best_index = -1;
+    grid.for_each_near(uv.x(), uv.y(), radius_px, [&](int i) {
+      const cv::Point2f& kp = frame.keypoints[static_cast<std::size_t>(i)].pt;
+      const double du = kp.x - uv.x(), dv = kp.y - uv.y();
+      if (du * du + dv * dv > radius_px * radius_px) return;
+      const int d = cv::hal::normHamming(last_descriptors_.ptr<std::uint8_t>(static_cast<int>(k)),
+                                         frame.descriptors.ptr<std::uint8_t>(i), last_descriptors_.cols);
+      if (d < best) {
+        second = best;
+        best = d;
+        best_index = i;
+      } else if (d < second) {
+        second = d;
+      }
+    });
+    if (best_index < 0 || best > settings_.max_hamming) continue;
+    if (second != INT_MAX && best >= settings_.ratio * second) continue;
+    auto& slot = best_distance[static_cast<std::size_t>(best_index)];
+    if (best < slot) {
+      slot = best;
+      source[static_cast<std::size_t>(best_index)] = static_cast<int>(k);
+    }
+  }
+  std::vector<int> keypoints;
+  std::vector<Eigen::Vector3d> points_world;
+  for (int i = 0; i < frame.size(); ++i) {
+    const int k = source[static_cast<std::size_t>(i)];
+    if (k < 0) continue;
+    keypoints.push_back(i);
+    points_world.push_back(T_world_last_ * last_points_camera_m_[static_cast<std::size_t>(k)]);
+  }
+  if (static_cast<int>(keypoints.size()) < settings_.min_matches) return false;
+  Eigen::Isometry3d T_ransac;
+  if (!ransac_pose(frame, keypoints, points_world, settings_.min_inliers, T_ransac)) return false;
+  std::vector<PoseObservation> observations;
+  for (std::size_t k = 0; k < keypoints.size(); ++k) {
+    const cv::KeyPoint& kp = frame.keypoints[static_cast<std::size_t>(keypoints[k])];
+    PoseObservation o;
+    o.point_world_m = points_world[k];
+    o.pixel_px = Eigen::Vector2d(kp.pt.x, kp.pt.y);
+    o.sigma_px = keypoint_sigma_px(kp, orb_scale_factor_);
+    observations.push_back(o);
+  }
+  PoseRefinementResult refined;
+  try {
+    refined = refiner_.refine(intrinsics_, observations, T_ransac);
+  } catch (const std::invalid_argument&) {
+    return false;
+  }
+  if (refined.inlier_count < settings_.min_inliers) return false;
+  if ((refined.T_world_camera.translation() - prediction.translation()).norm() > settings_.max_jump_m) return false;
+  // The map points that agree with the odometry pose become the frame's tracked points (few: the
+  // map lags behind the view, so the keyframe policy's tracking guard makes this frame a keyframe
+  // and its depth fills the map where the view has gone).
+  out = Attempt{};
+  out.T_world_camera = refined.T_world_camera;
+  std::vector<std::int64_t> matches;
+  out.matches = match_by_projection(frame, map, local_map_points(map, reference_keyframe_), out.T_world_camera,
+                                    settings_.search_radius_px, matches);
+  out.map_point_ids.assign(matches.size(), -1);
+  const Eigen::Isometry3d T_camera_world_refined = out.T_world_camera.inverse();
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    if (matches[i] < 0) continue;
+    const Eigen::Vector3d p_camera = T_camera_world_refined * map.map_point(matches[i]).position_world;
+    const Eigen::Vector2d r =
+        intrinsics_.project(p_camera) - Eigen::Vector2d(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
+    const double sigma = keypoint_sigma_px(frame.keypoints[i], orb_scale_factor_);
+    if (r.squaredNorm() / (sigma * sigma) > settings_.refinement.chi2_threshold) continue;
+    out.map_point_ids[i] = matches[i];
+    ++out.inliers;
+  }
+  return true;
+}
+
+void Tracker::remember_last_frame(const Frame& frame) {
+  last_keypoints_.clear();
+  last_points_camera_m_.clear();
+  last_descriptors_ = cv::Mat();
+  for (int i = 0; i < frame.size(); ++i) {
+    if (!frame.is_static(i) || !frame.has_depth(i)) continue;
+    last_keypoints_.push_back(i);
+    last_points_camera_m_.push_back(frame.points_camera_m[static_cast<std::size_t>(i)]);
+    last_descriptors_.push_back(frame.descriptors.row(i));
+  }
+}
+
 bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const {
   std::vector<int> query_index;
   for (int i = 0; i < frame.size(); ++i) {
@@ -311,6 +425,7 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
     if (usable < settings_.min_initial_points) return result;  // lost: not enough to start a map
     result.state = TrackingState::initialised;
     last_has_pose_ = true;
+    remember_last_frame(frame);
     T_world_last_ = Eigen::Isometry3d::Identity();
     T_last_current_velocity_ = Eigen::Isometry3d::Identity();
     return result;
@@ -319,6 +434,12 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
   Attempt attempt;
   TrackingState state = TrackingState::tracked;
   bool ok = track_local_map(frame, map, prediction, attempt);
+  // The view has moved beyond the map (the keyframes lag behind a fast turn): frame-to-frame
+  // odometry against the previous frame keeps the pose, and the frame becomes a keyframe.
+  if (!ok && last_has_pose_ && settings_.track_last_frame) {
+    attempt = Attempt{};
+    ok = track_last_frame(frame, map, prediction, attempt);
+  }
   if (!ok) {
     ok = relocalise(frame, map, attempt);
     state = TrackingState::relocalised;
@@ -326,8 +447,10 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
   if (!ok) {
     T_last_current_velocity_ = Eigen::Isometry3d::Identity();  // the motion model is stale now
     last_has_pose_ = false;
+    last_keypoints_.clear();
     return result;
   }
+  remember_last_frame(frame);
   // The motion since the previous frame is known whenever that frame had a pose, relocalised or
   // not (resetting it after every relocalisation predicted a standing camera, one frame's motion
   // off, and failed again at the next frame).

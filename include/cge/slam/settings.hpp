@@ -92,6 +92,10 @@ struct TrackerSettings {
   double pnp_confidence = 0.99;      ///< RANSAC confidence, in (0, 1)
   /// Inliers under this after refinement: the frame is lost (ORB-SLAM2 RGB-D: 30 in the local map).
   int min_inliers = 30;
+  /// When the local map fails, track the frame against the previous frame's static keypoints with
+  /// depth (odometry; needs min_matches matches and min_inliers inliers) before relocalising: the
+  /// keyframes' map lags behind a fast turn (loop_dynamic at 181 frames lost 13 frames without it).
+  bool track_last_frame = true;
   /// A tracked pose farther than this from the prediction is rejected as a wrong solution (the
   /// camera moves some centimetres per frame), metres.
   double max_jump_m = 0.3;

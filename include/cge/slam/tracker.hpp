@@ -5,12 +5,15 @@
 // static keypoints by descriptor in a window; PnP with RANSAC on the matches; refinement by
 // minimising reprojection error on the inliers; a quality check. A failure at the normal search
 // radius is retried once with the wide radius (a wrong prediction gives enough matches, most of
-// them wrong, so the count alone does not reveal it). When both fail: relocalisation against
-// candidate keyframes (descriptor matching + PnP, then the local map around the candidate): the
-// last keyframes and, when a candidate source is set (the System's bag-of-words database), the
-// keyframes most alike anywhere in the map, as ORB-SLAM2 does; else the frame is reported lost. The
-// first frame (empty map) is reported `initialised` at the identity pose: the System makes it the
-// first keyframe with map points from depth (RGB-D needs no two-view initialisation).
+// them wrong, so the count alone does not reveal it). When both fail, odometry against the previous
+// frame (its static keypoints with depth as temporary points, as ORB-SLAM2's RGB-D motion model):
+// on a fast turn the view leaves the keyframes' map within a frame or two, and the few map points
+// the odometry pose still matches trigger the keyframe policy's tracking guard. When that fails too: relocalisation
+// against candidate keyframes (descriptor matching + PnP, then the local map around the candidate): the last keyframes
+// and, when a candidate source is set (the System's bag-of-words database), the keyframes most alike anywhere in the
+// map, as ORB-SLAM2 does; else the frame is reported lost. The first frame (empty map) is reported `initialised` at the
+// identity pose: the System makes it the first keyframe with map points from depth (RGB-D needs no two-view
+// initialisation).
 //
 // Refinement: PoseRefiner (cge/ceres/pose_refinement.hpp) on every match from the RANSAC pose; its
 // chi2 classification gives the inliers.
@@ -85,6 +88,13 @@ class Tracker {
   struct Attempt;
   bool track_local_map(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction, Attempt& out) const;
   bool relocalise(const Frame& frame, const Map& map, Attempt& out) const;
+  /// Odometry against the previous frame's static keypoints with depth; the map points agreeing
+  /// with the resulting pose are the tracked ones.
+  bool track_last_frame(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction, Attempt& out) const;
+  void remember_last_frame(const Frame& frame);
+  bool ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
+                   const std::vector<Eigen::Vector3d>& points_world, int min_inliers,
+                   Eigen::Isometry3d& T_world_camera) const;
   int match_by_projection(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
                           const Eigen::Isometry3d& T_world_camera, double radius_px,
                           std::vector<std::int64_t>& matches) const;
@@ -107,6 +117,11 @@ class Tracker {
   CandidateSource candidate_source_;
   /// The previous frame had a pose: the frame-to-frame motion is known (else the last pose is stale).
   bool last_has_pose_ = false;
+  // The previous frame's static keypoints with depth (odometry fallback): index, camera-frame
+  // point (its world position is T_world_last_ * point, so a map correction moves it too), descriptor.
+  std::vector<int> last_keypoints_;
+  std::vector<Eigen::Vector3d> last_points_camera_m_;
+  cv::Mat last_descriptors_;
   Eigen::Isometry3d T_world_last_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_last_current_velocity_ = Eigen::Isometry3d::Identity();  ///< last frame-to-frame motion
   int reference_keyframe_ = -1;
