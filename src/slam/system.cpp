@@ -63,6 +63,26 @@ System& System::operator=(System&&) noexcept = default;
 void System::set_loop_closer(std::unique_ptr<LoopCloser> loop_closer) {
   if (map_.keyframe_count() > 0) throw std::logic_error("System::set_loop_closer: the map has keyframes already");
   loop_closer_ = std::move(loop_closer);
+  if (loop_closer_ == nullptr) {
+    tracker_.set_relocalisation_candidates(nullptr);
+    return;
+  }
+  // Relocalisation over the whole map: keyframes by BoW score of the frame's static features, best
+  // first. The closer's object outlives moves of the System (owned through a unique_ptr).
+  const LoopCloser* closer = loop_closer_.get();
+  tracker_.set_relocalisation_candidates([closer](const Frame& frame) {
+    cv::Mat static_descriptors;
+    for (int i = 0; i < frame.size(); ++i) {
+      if (frame.is_static(i)) static_descriptors.push_back(frame.descriptors.row(i));
+    }
+    std::vector<BowQueryMatch> matches;
+    if (!static_descriptors.empty()) matches = closer->query_bow(static_descriptors);
+    std::stable_sort(matches.begin(), matches.end(),
+                     [](const BowQueryMatch& a, const BowQueryMatch& b) { return a.score > b.score; });
+    std::vector<int> ids;
+    for (const BowQueryMatch& m : matches) ids.push_back(m.keyframe_id);
+    return ids;
+  });
 }
 
 const FrameRecord& System::process(const FrameInput& input) {

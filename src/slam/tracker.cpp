@@ -97,13 +97,13 @@ Tracker::Tracker(const TrackerSettings& settings, const PinholeIntrinsics<double
       orb_scale_factor_(orb_scale_factor),
       refiner_(settings.refinement) {}
 
-std::vector<std::int64_t> Tracker::local_map_points(const Map& map) const {
+std::vector<std::int64_t> Tracker::local_map_points(const Map& map, int centre) const {
   std::set<int> keyframes;
   const int n = map.keyframe_count();
   for (int id = std::max(0, n - settings_.local_recent_keyframes); id < n; ++id) keyframes.insert(id);
-  if (reference_keyframe_ >= 0 && reference_keyframe_ < n) {
-    keyframes.insert(reference_keyframe_);
-    for (const int id : map.covisible_keyframes(reference_keyframe_, settings_.local_covisible_keyframes)) {
+  if (centre >= 0 && centre < n) {
+    keyframes.insert(centre);
+    for (const int id : map.covisible_keyframes(centre, settings_.local_covisible_keyframes)) {
       keyframes.insert(id);
     }
   }
@@ -160,13 +160,26 @@ int Tracker::match_by_projection(const Frame& frame, const Map& map, const std::
 
 bool Tracker::ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches, int min_inliers,
                           Eigen::Isometry3d& T_world_camera) const {
-  std::vector<cv::Point3d> object;
-  std::vector<cv::Point2d> image;
+  std::vector<int> keypoints;
+  std::vector<Eigen::Vector3d> points_world;
   for (std::size_t i = 0; i < matches.size(); ++i) {
     if (matches[i] < 0) continue;
-    const Eigen::Vector3d& X = map.map_point(matches[i]).position_world;
+    keypoints.push_back(static_cast<int>(i));
+    points_world.push_back(map.map_point(matches[i]).position_world);
+  }
+  return ransac_pose(frame, keypoints, points_world, min_inliers, T_world_camera);
+}
+
+bool Tracker::ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
+                          const std::vector<Eigen::Vector3d>& points_world, int min_inliers,
+                          Eigen::Isometry3d& T_world_camera) const {
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  for (std::size_t k = 0; k < keypoints.size(); ++k) {
+    const Eigen::Vector3d& X = points_world[k];
+    const cv::Point2f& uv = frame.keypoints[static_cast<std::size_t>(keypoints[k])].pt;
     object.emplace_back(X.x(), X.y(), X.z());
-    image.emplace_back(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
+    image.emplace_back(uv.x, uv.y);
   }
   if (static_cast<int>(object.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
   const cv::Matx33d K(intrinsics_.fx_px, 0, intrinsics_.cx_px, 0, intrinsics_.fy_px, intrinsics_.cy_px, 0, 0, 1);
@@ -221,16 +234,10 @@ bool Tracker::refine_with_local_map(const Frame& frame, const Map& map, const st
   return refine_pose(frame, map, matches, T_initial, settings_.min_inliers, out);
 }
 
-bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction,
-                              Attempt& out) const {
-  const std::vector<std::int64_t> points = local_map_points(map);
+bool Tracker::track_with_radius(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
+                                const Eigen::Isometry3d& prediction, double radius_px, Attempt& out) const {
   std::vector<std::int64_t> matches;
-  int found = match_by_projection(frame, map, points, prediction, settings_.search_radius_px, matches);
-  if (found < settings_.min_matches) {
-    found = match_by_projection(frame, map, points, prediction,
-                                settings_.search_radius_px * settings_.wide_search_factor, matches);
-  }
-  if (found < settings_.min_matches) return false;
+  if (match_by_projection(frame, map, points, prediction, radius_px, matches) < settings_.min_matches) return false;
   // RANSAC on the matches of the prediction, then the matches of that pose refined (the second
   // search finds the points the prediction missed).
   Eigen::Isometry3d T_ransac;
@@ -238,6 +245,118 @@ bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::I
   if ((T_ransac.translation() - prediction.translation()).norm() > settings_.max_jump_m) return false;
   if (!refine_with_local_map(frame, map, points, T_ransac, out)) return false;
   return (out.T_world_camera.translation() - prediction.translation()).norm() <= settings_.max_jump_m;
+}
+
+bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction,
+                              Attempt& out) const {
+  const std::vector<std::int64_t> points = local_map_points(map, reference_keyframe_);
+  if (track_with_radius(frame, map, points, prediction, settings_.search_radius_px, out)) return true;
+  // A prediction off by more than the window still finds enough matches on repeated texture, most
+  // of them wrong: retry on the failure itself, not only on a low match count.
+  out = Attempt{};
+  return track_with_radius(frame, map, points, prediction, settings_.search_radius_px * settings_.wide_search_factor,
+                           out);
+}
+
+bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction,
+                               Attempt& out) const {
+  if (last_keypoints_.empty()) return false;
+  // Projection matching of the previous frame's static keypoints with depth (temporary points, as
+  // ORB-SLAM2's RGB-D motion model does) within the wide window: one frame of motion at most.
+  const KeypointGrid grid(frame);
+  const Eigen::Isometry3d T_camera_world = prediction.inverse();
+  const double radius_px = settings_.search_radius_px * settings_.wide_search_factor;
+  std::vector<int> best_distance(static_cast<std::size_t>(frame.size()), INT_MAX);
+  std::vector<int> source(static_cast<std::size_t>(frame.size()), -1);
+  for (std::size_t k = 0; k < last_keypoints_.size(); ++k) {
+    const Eigen::Vector3d p_world = T_world_last_ * last_points_camera_m_[k];
+    const Eigen::Vector3d p_camera = T_camera_world * p_world;
+    if (p_camera.z() < kMinPointDepthM) continue;
+    const Eigen::Vector2d uv = intrinsics_.project(p_camera);
+    int best = INT_MAX, second = INT_MAX, best_index = -1;
+    grid.for_each_near(uv.x(), uv.y(), radius_px, [&](int i) {
+      const cv::Point2f& kp = frame.keypoints[static_cast<std::size_t>(i)].pt;
+      const double du = kp.x - uv.x(), dv = kp.y - uv.y();
+      if (du * du + dv * dv > radius_px * radius_px) return;
+      const int d = cv::hal::normHamming(last_descriptors_.ptr<std::uint8_t>(static_cast<int>(k)),
+                                         frame.descriptors.ptr<std::uint8_t>(i), last_descriptors_.cols);
+      if (d < best) {
+        second = best;
+        best = d;
+        best_index = i;
+      } else if (d < second) {
+        second = d;
+      }
+    });
+    if (best_index < 0 || best > settings_.max_hamming) continue;
+    if (second != INT_MAX && best >= settings_.ratio * second) continue;
+    auto& slot = best_distance[static_cast<std::size_t>(best_index)];
+    if (best < slot) {
+      slot = best;
+      source[static_cast<std::size_t>(best_index)] = static_cast<int>(k);
+    }
+  }
+  std::vector<int> keypoints;
+  std::vector<Eigen::Vector3d> points_world;
+  for (int i = 0; i < frame.size(); ++i) {
+    const int k = source[static_cast<std::size_t>(i)];
+    if (k < 0) continue;
+    keypoints.push_back(i);
+    points_world.push_back(T_world_last_ * last_points_camera_m_[static_cast<std::size_t>(k)]);
+  }
+  if (static_cast<int>(keypoints.size()) < settings_.min_matches) return false;
+  Eigen::Isometry3d T_ransac;
+  if (!ransac_pose(frame, keypoints, points_world, settings_.min_inliers, T_ransac)) return false;
+  std::vector<PoseObservation> observations;
+  for (std::size_t k = 0; k < keypoints.size(); ++k) {
+    const cv::KeyPoint& kp = frame.keypoints[static_cast<std::size_t>(keypoints[k])];
+    PoseObservation o;
+    o.point_world_m = points_world[k];
+    o.pixel_px = Eigen::Vector2d(kp.pt.x, kp.pt.y);
+    o.sigma_px = keypoint_sigma_px(kp, orb_scale_factor_);
+    observations.push_back(o);
+  }
+  PoseRefinementResult refined;
+  try {
+    refined = refiner_.refine(intrinsics_, observations, T_ransac);
+  } catch (const std::invalid_argument&) {
+    return false;
+  }
+  if (refined.inlier_count < settings_.min_inliers) return false;
+  if ((refined.T_world_camera.translation() - prediction.translation()).norm() > settings_.max_jump_m) return false;
+  // The map points that agree with the odometry pose become the frame's tracked points (few: the
+  // map lags behind the view, so the keyframe policy's tracking guard makes this frame a keyframe
+  // and its depth fills the map where the view has gone).
+  out = Attempt{};
+  out.T_world_camera = refined.T_world_camera;
+  std::vector<std::int64_t> matches;
+  out.matches = match_by_projection(frame, map, local_map_points(map, reference_keyframe_), out.T_world_camera,
+                                    settings_.search_radius_px, matches);
+  out.map_point_ids.assign(matches.size(), -1);
+  const Eigen::Isometry3d T_camera_world_refined = out.T_world_camera.inverse();
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    if (matches[i] < 0) continue;
+    const Eigen::Vector3d p_camera = T_camera_world_refined * map.map_point(matches[i]).position_world;
+    const Eigen::Vector2d r =
+        intrinsics_.project(p_camera) - Eigen::Vector2d(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
+    const double sigma = keypoint_sigma_px(frame.keypoints[i], orb_scale_factor_);
+    if (r.squaredNorm() / (sigma * sigma) > settings_.refinement.chi2_threshold) continue;
+    out.map_point_ids[i] = matches[i];
+    ++out.inliers;
+  }
+  return true;
+}
+
+void Tracker::remember_last_frame(const Frame& frame) {
+  last_keypoints_.clear();
+  last_points_camera_m_.clear();
+  last_descriptors_ = cv::Mat();
+  for (int i = 0; i < frame.size(); ++i) {
+    if (!frame.is_static(i) || !frame.has_depth(i)) continue;
+    last_keypoints_.push_back(i);
+    last_points_camera_m_.push_back(frame.points_camera_m[static_cast<std::size_t>(i)]);
+    last_descriptors_.push_back(frame.descriptors.row(i));
+  }
 }
 
 bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const {
@@ -249,9 +368,21 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
   cv::Mat query(static_cast<int>(query_index.size()), frame.descriptors.cols, frame.descriptors.type());
   for (std::size_t q = 0; q < query_index.size(); ++q)
     frame.descriptors.row(query_index[q]).copyTo(query.row(static_cast<int>(q)));
-  cv::BFMatcher matcher(cv::NORM_HAMMING);
+  // Candidates: the source's (anywhere in the map, best first), then the last keyframes, each once.
   const int n = map.keyframe_count();
+  std::vector<int> candidates;
+  if (candidate_source_) {
+    for (const int id : candidate_source_(frame)) {
+      if (id < 0 || id >= n) continue;
+      if (static_cast<int>(candidates.size()) >= settings_.relocalisation_candidates) break;
+      candidates.push_back(id);
+    }
+  }
   for (int id = n - 1; id >= std::max(0, n - settings_.relocalisation_keyframes); --id) {
+    if (std::find(candidates.begin(), candidates.end(), id) == candidates.end()) candidates.push_back(id);
+  }
+  cv::BFMatcher matcher(cv::NORM_HAMMING);
+  for (const int id : candidates) {
     const Keyframe& kf = map.keyframe(id);
     std::vector<std::int64_t> train_point;
     cv::Mat train;
@@ -276,7 +407,8 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
     Eigen::Isometry3d T_ransac;
     if (!ransac_pose(frame, map, matches, settings_.min_relocalisation_inliers, T_ransac)) continue;
     Attempt local;
-    if (!refine_with_local_map(frame, map, local_map_points(map), T_ransac, local)) continue;
+    // The local map around the candidate: an old place's points are not in the current one.
+    if (!refine_with_local_map(frame, map, local_map_points(map, id), T_ransac, local)) continue;
     if (local.inliers < settings_.min_relocalisation_inliers) continue;
     out = std::move(local);
     return true;
@@ -292,7 +424,8 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
     for (int i = 0; i < frame.size(); ++i) usable += frame.is_static(i) && frame.has_depth(i);
     if (usable < settings_.min_initial_points) return result;  // lost: not enough to start a map
     result.state = TrackingState::initialised;
-    has_last_ = true;
+    last_has_pose_ = true;
+    remember_last_frame(frame);
     T_world_last_ = Eigen::Isometry3d::Identity();
     T_last_current_velocity_ = Eigen::Isometry3d::Identity();
     return result;
@@ -301,16 +434,29 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
   Attempt attempt;
   TrackingState state = TrackingState::tracked;
   bool ok = track_local_map(frame, map, prediction, attempt);
+  // The view has moved beyond the map (the keyframes lag behind a fast turn): frame-to-frame
+  // odometry against the previous frame keeps the pose, and the frame becomes a keyframe.
+  if (!ok && last_has_pose_ && settings_.track_last_frame) {
+    attempt = Attempt{};
+    ok = track_last_frame(frame, map, prediction, attempt);
+  }
   if (!ok) {
     ok = relocalise(frame, map, attempt);
     state = TrackingState::relocalised;
   }
   if (!ok) {
     T_last_current_velocity_ = Eigen::Isometry3d::Identity();  // the motion model is stale now
+    last_has_pose_ = false;
+    last_keypoints_.clear();
     return result;
   }
-  T_last_current_velocity_ = state == TrackingState::tracked ? T_world_last_.inverse() * attempt.T_world_camera
-                                                             : Eigen::Isometry3d::Identity();
+  remember_last_frame(frame);
+  // The motion since the previous frame is known whenever that frame had a pose, relocalised or
+  // not (resetting it after every relocalisation predicted a standing camera, one frame's motion
+  // off, and failed again at the next frame).
+  T_last_current_velocity_ =
+      last_has_pose_ ? T_world_last_.inverse() * attempt.T_world_camera : Eigen::Isometry3d::Identity();
+  last_has_pose_ = true;
   T_world_last_ = attempt.T_world_camera;
   result.state = state;
   result.T_world_camera = attempt.T_world_camera;

@@ -140,6 +140,9 @@ class LoopCloser {
   LoopDecision process(const Keyframe& current, const KeyframeDatabaseView& map);
 
   int processed_count() const { return processed_; }
+  /// The BoW model's matches of `descriptors` among every keyframe processed so far (for
+  /// relocalisation over the whole map); sorted by ascending keyframe id.
+  std::vector<BowQueryMatch> query_bow(const cv::Mat& descriptors) const { return model_->query(descriptors); }
   const LoopCloserSettings& settings() const { return settings_; }
 
  private:

@@ -92,6 +92,10 @@ struct TrackerSettings {
   double pnp_confidence = 0.99;      ///< RANSAC confidence, in (0, 1)
   /// Inliers under this after refinement: the frame is lost (ORB-SLAM2 RGB-D: 30 in the local map).
   int min_inliers = 30;
+  /// When the local map fails, track the frame against the previous frame's static keypoints with
+  /// depth (odometry; needs min_matches matches and min_inliers inliers) before relocalising: the
+  /// keyframes' map lags behind a fast turn (loop_dynamic at 181 frames lost 13 frames without it).
+  bool track_last_frame = true;
   /// A tracked pose farther than this from the prediction is rejected as a wrong solution (the
   /// camera moves some centimetres per frame), metres.
   double max_jump_m = 0.3;
@@ -101,7 +105,11 @@ struct TrackerSettings {
   /// The first frame initialises the map only with at least this many static keypoints with
   /// depth (ORB-SLAM2 RGB-D: 500); with fewer it is reported lost and the next frame tries.
   int min_initial_points = 100;
-  int relocalisation_keyframes = 10;    ///< relocalisation tries the last keyframes, count
+  int relocalisation_keyframes = 10;  ///< relocalisation tries the last keyframes, count
+  /// Relocalisation first tries at most this many keyframes of the candidate source (the System's
+  /// bag-of-words query over all keyframes, best score first), count; ORB-SLAM2 also searches the
+  /// whole map, so a camera lost away from the last keyframes can come back.
+  int relocalisation_candidates = 10;
   int min_relocalisation_inliers = 50;  ///< PnP inliers to accept a relocalisation
 };
 
@@ -174,6 +182,7 @@ struct SystemSettings {
     t.refinement.validate();
     if (t.min_initial_points < 4) fail("tracker.min_initial_points must be at least 4");
     if (t.relocalisation_keyframes < 0) fail("tracker.relocalisation_keyframes must not be negative");
+    if (t.relocalisation_candidates < 0) fail("tracker.relocalisation_candidates must not be negative");
     if (t.min_relocalisation_inliers < 4) fail("tracker.min_relocalisation_inliers must be at least 4");
     if (!(mapping.max_new_point_depth_m > 0)) fail("mapping.max_new_point_depth_m must be > 0");
     if (mapping.reference_min_observations < 1) fail("mapping.reference_min_observations must be at least 1");

@@ -3,10 +3,17 @@
 // constant-velocity prediction; projection of the local map's points (those seen by the last
 // keyframes and by the reference keyframe's covisible ones) into the frame and matching to its
 // static keypoints by descriptor in a window; PnP with RANSAC on the matches; refinement by
-// minimising reprojection error on the inliers; a quality check. When it fails: relocalisation
-// against the last keyframes (descriptor matching + PnP), else the frame is reported lost. The
-// first frame (empty map) is reported `initialised` at the identity pose: the System makes it the
-// first keyframe with map points from depth (RGB-D needs no two-view initialisation).
+// minimising reprojection error on the inliers; a quality check. A failure at the normal search
+// radius is retried once with the wide radius (a wrong prediction gives enough matches, most of
+// them wrong, so the count alone does not reveal it). When both fail, odometry against the previous
+// frame (its static keypoints with depth as temporary points, as ORB-SLAM2's RGB-D motion model):
+// on a fast turn the view leaves the keyframes' map within a frame or two, and the few map points
+// the odometry pose still matches trigger the keyframe policy's tracking guard. When that fails too: relocalisation
+// against candidate keyframes (descriptor matching + PnP, then the local map around the candidate): the last keyframes
+// and, when a candidate source is set (the System's bag-of-words database), the keyframes most alike anywhere in the
+// map, as ORB-SLAM2 does; else the frame is reported lost. The first frame (empty map) is reported `initialised` at the
+// identity pose: the System makes it the first keyframe with map points from depth (RGB-D needs no two-view
+// initialisation).
 //
 // Refinement: PoseRefiner (cge/ceres/pose_refinement.hpp) on every match from the RANSAC pose; its
 // chi2 classification gives the inliers.
@@ -14,6 +21,7 @@
 // Deterministic: cv::solvePnPRansac draws from its own fixed-seed generator, matching visits map
 // points and keypoints in id order, Ceres runs single-threaded.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -63,6 +71,11 @@ class Tracker {
   void set_reference_keyframe(int keyframe_id) { reference_keyframe_ = keyframe_id; }
   int reference_keyframe() const { return reference_keyframe_; }
 
+  /// Relocalisation candidates beyond the last keyframes: keyframe ids, most promising first
+  /// (e.g. by bag-of-words score over all keyframes). Called only when tracking has failed.
+  using CandidateSource = std::function<std::vector<int>(const Frame& frame)>;
+  void set_relocalisation_candidates(CandidateSource source) { candidate_source_ = std::move(source); }
+
   /// The map was corrected (loop closure): the last tracked pose moves with it, so the next
   /// prediction lands in the corrected map. T_corrected_old maps old world coordinates to new ones.
   void apply_map_correction(const Eigen::Isometry3d& T_corrected_old) {
@@ -75,6 +88,13 @@ class Tracker {
   struct Attempt;
   bool track_local_map(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction, Attempt& out) const;
   bool relocalise(const Frame& frame, const Map& map, Attempt& out) const;
+  /// Odometry against the previous frame's static keypoints with depth; the map points agreeing
+  /// with the resulting pose are the tracked ones.
+  bool track_last_frame(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction, Attempt& out) const;
+  void remember_last_frame(const Frame& frame);
+  bool ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
+                   const std::vector<Eigen::Vector3d>& points_world, int min_inliers,
+                   Eigen::Isometry3d& T_world_camera) const;
   int match_by_projection(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
                           const Eigen::Isometry3d& T_world_camera, double radius_px,
                           std::vector<std::int64_t>& matches) const;
@@ -84,13 +104,24 @@ class Tracker {
                    const Eigen::Isometry3d& T_initial, int min_inliers, Attempt& out) const;
   bool refine_with_local_map(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
                              const Eigen::Isometry3d& T_initial, Attempt& out) const;
-  std::vector<std::int64_t> local_map_points(const Map& map) const;
+  /// Points of the local map around keyframe `centre` (-1: none): the last keyframes, the centre
+  /// and its most covisible keyframes.
+  std::vector<std::int64_t> local_map_points(const Map& map, int centre) const;
+  bool track_with_radius(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
+                         const Eigen::Isometry3d& prediction, double radius_px, Attempt& out) const;
 
   TrackerSettings settings_;
   PinholeIntrinsics<double> intrinsics_;
   double orb_scale_factor_;
   PoseRefiner refiner_;
-  bool has_last_ = false;
+  CandidateSource candidate_source_;
+  /// The previous frame had a pose: the frame-to-frame motion is known (else the last pose is stale).
+  bool last_has_pose_ = false;
+  // The previous frame's static keypoints with depth (odometry fallback): index, camera-frame
+  // point (its world position is T_world_last_ * point, so a map correction moves it too), descriptor.
+  std::vector<int> last_keypoints_;
+  std::vector<Eigen::Vector3d> last_points_camera_m_;
+  cv::Mat last_descriptors_;
   Eigen::Isometry3d T_world_last_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_last_current_velocity_ = Eigen::Isometry3d::Identity();  ///< last frame-to-frame motion
   int reference_keyframe_ = -1;
