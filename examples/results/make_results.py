@@ -25,7 +25,9 @@ import shutil
 import subprocess
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -73,10 +75,11 @@ class Runner:
             raise ToolError(f"{path}: not found or not executable (build the tools first)")
         return str(path)
 
-    def run(self, name: str, *args: str, capture_json: bool = False) -> dict | str:
+    def run(self, name: str, *args: str, capture_json: bool = False, log: list[str] | None = None) -> dict | str:
+        """Runs one tool; its command goes to `log` (a parallel task's own list) or the runner's."""
         argv = [self.tool(name), *map(str, args)]
         shown = " ".join([name, *map(str, args)]).replace(str(self.work) + "/", "")
-        self.commands.append(shown)
+        (self.commands if log is None else log).append(shown)
         if self.verbose:
             print(f"  $ {shown}", flush=True)
         result = subprocess.run(argv, capture_output=True, text=True)
@@ -86,6 +89,18 @@ class Runner:
         if capture_json:
             return json.loads(result.stdout)
         return result.stdout
+
+    def parallel(self, tasks: list, jobs: int) -> list:
+        """Runs independent tasks (each takes its command log) `jobs` at a time; every tool is single
+        threaded, so each run has a core of its own. Results and the command log keep the tasks'
+        order whatever order they finish in; the first failure (in task order) is raised."""
+        logs: list[list[str]] = [[] for _ in tasks]
+        with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+            futures = [pool.submit(task, log) for task, log in zip(tasks, logs)]
+            results = [f.result() for f in futures]
+        for log in logs:
+            self.commands.extend(log)
+        return results
 
 
 def name_value_lines(text: str) -> dict[str, float]:
@@ -119,66 +134,75 @@ def render(runner: Runner, preset: str, frames: int, seed: int) -> Path:
     return out
 
 
-def slam(runner: Runner, sequence: Path, out: Path, *flags: str) -> dict:
-    runner.run("cge_slam", "--dataset", sequence, "--out", out, "--force", *flags)
+def slam(runner: Runner, log: list[str], sequence: Path, out: Path, *flags: str) -> dict:
+    runner.run("cge_slam", "--dataset", sequence, "--out", out, "--force", *flags, log=log)
     return read_json(out / "summary.json")
 
 
-def walking_runs(runner: Runner, plan: Plan) -> dict:
+def walking_runs(runner: Runner, plan: Plan, jobs: int) -> dict:
     """Every walking preset in every mode; maps and aligned trajectories for the figures."""
-    runs: dict = {}
-    for preset in WALKING_PRESETS:
-        sequence = render(runner, preset, plan.walking_frames, plan.seed)
-        for mode in MODES:
-            out = runner.work / "runs" / preset / mode
-            map_flags = ["--map"] if preset == "walking_xyz" else []
-            summary = slam(runner, sequence, out, "--mode", mode, "--seed", str(plan.seed), *map_flags)
-            run = {"summary": summary, "dir": out, "sequence": sequence}
-            aligned = out / "aligned.csv"
-            runner.run("cge_eval", "ate", sequence / "groundtruth.txt", out / "trajectory.txt",
-                       "--aligned-out", aligned, "--force")
-            run["aligned"] = read_csv(aligned)
-            if map_flags:
-                run["map_eval"] = runner.run("cge_eval", "map", out / "map.ot", "--sequence", sequence, "--trajectory",
-                                             out / "trajectory.txt", "--json", capture_json=True)
-            runs[(preset, mode)] = run
-            print(f"  {preset:20s} {mode:4s} ate {fmt_m(summary.get('ate', {}).get('rmse_m'))}", flush=True)
+    sequences = {preset: render(runner, preset, plan.walking_frames, plan.seed) for preset in WALKING_PRESETS}
+
+    def one(preset: str, mode: str, log: list[str]) -> dict:
+        sequence = sequences[preset]
+        out = runner.work / "runs" / preset / mode
+        map_flags = ["--map"] if preset == "walking_xyz" else []
+        summary = slam(runner, log, sequence, out, "--mode", mode, "--seed", str(plan.seed), *map_flags)
+        run = {"summary": summary, "dir": out, "sequence": sequence}
+        aligned = out / "aligned.csv"
+        runner.run("cge_eval", "ate", sequence / "groundtruth.txt", out / "trajectory.txt", "--aligned-out", aligned,
+                   "--force", log=log)
+        run["aligned"] = read_csv(aligned)
+        if map_flags:
+            run["map_eval"] = runner.run("cge_eval", "map", out / "map.ot", "--sequence", sequence, "--trajectory",
+                                         out / "trajectory.txt", "--json", capture_json=True, log=log)
+        return run
+
+    keys = [(preset, mode) for preset in WALKING_PRESETS for mode in MODES]
+    runs = dict(zip(keys, runner.parallel([partial(one, *key) for key in keys], jobs)))
+    for (preset, mode), run in runs.items():
+        print(f"  {preset:20s} {mode:4s} ate {fmt_m(run['summary'].get('ate', {}).get('rmse_m'))}", flush=True)
     return runs
 
 
-def loop_runs(runner: Runner, plan: Plan, vocabulary: Path) -> dict:
+def loop_runs(runner: Runner, plan: Plan, vocabulary: Path, jobs: int) -> dict:
     """Each loop scene with each loop scoring (mode YMK, pose graph + bundle adjustment), and the
     precision-recall curve over the acceptance threshold of each run's accepted loops."""
-    runs: dict = {}
-    for preset in LOOP_PRESETS:
-        sequence = render(runner, preset, plan.loop_frames, plan.seed)
-        for scoring in LOOP_SCORINGS:
-            out = runner.work / "runs" / preset / scoring
-            summary = slam(runner, sequence, out, "--mode", "YMK", "--seed", str(plan.seed), "--vocabulary",
-                           vocabulary, "--loop-scoring", scoring, "--loop-correction", "pgo+ba")
-            evaluation = runner.run("cge_eval", "loops", sequence / "loops.txt", out / "loops.csv", "--json",
-                                    capture_json=True)
-            score_column = "bow_score" if scoring == "bow_only" else "cge_score"
-            curve_file = out / "pr_curve.csv"
-            runner.run("cge_eval", "loops", sequence / "loops.txt", out / "loops.csv", "--score", score_column,
-                       "--curve", curve_file, "--force")
-            runs[(preset, scoring)] = {"summary": summary, "loops": evaluation, "curve": read_csv(curve_file),
-                                       "score_column": score_column}
-            print(f"  {preset:22s} {scoring:9s} precision {evaluation.get('precision')} "
-                  f"query recall {evaluation.get('query_recall')}", flush=True)
+    sequences = {preset: render(runner, preset, plan.loop_frames, plan.seed) for preset in LOOP_PRESETS}
+
+    def one(preset: str, scoring: str, log: list[str]) -> dict:
+        sequence = sequences[preset]
+        out = runner.work / "runs" / preset / scoring
+        summary = slam(runner, log, sequence, out, "--mode", "YMK", "--seed", str(plan.seed), "--vocabulary",
+                       vocabulary, "--loop-scoring", scoring, "--loop-correction", "pgo+ba")
+        evaluation = runner.run("cge_eval", "loops", sequence / "loops.txt", out / "loops.csv", "--json",
+                                capture_json=True, log=log)
+        score_column = "bow_score" if scoring == "bow_only" else "cge_score"
+        curve_file = out / "pr_curve.csv"
+        runner.run("cge_eval", "loops", sequence / "loops.txt", out / "loops.csv", "--score", score_column,
+                   "--curve", curve_file, "--force", log=log)
+        return {"summary": summary, "loops": evaluation, "curve": read_csv(curve_file), "score_column": score_column}
+
+    keys = [(preset, scoring) for preset in LOOP_PRESETS for scoring in LOOP_SCORINGS]
+    runs = dict(zip(keys, runner.parallel([partial(one, *key) for key in keys], jobs)))
+    for (preset, scoring), run in runs.items():
+        e = run["loops"]
+        print(f"  {preset:22s} {scoring:9s} precision {e.get('precision')} query recall {e.get('query_recall')}",
+              flush=True)
     return runs
 
 
-def entropy_study(runner: Runner, plan: Plan) -> dict:
-    studies: dict = {}
-    for preset in LOOP_PRESETS:
-        sequence = render(runner, preset, plan.loop_frames, plan.seed)
+def entropy_study(runner: Runner, plan: Plan, jobs: int) -> dict:
+    sequences = {preset: render(runner, preset, plan.loop_frames, plan.seed) for preset in LOOP_PRESETS}
+
+    def one(preset: str, log: list[str]) -> dict:
         out = runner.work / "study" / preset
-        printed = runner.run("cge_loop_study", "--dataset", sequence, "--out", out, "--force", "--step",
-                             plan.study_step)
-        studies[preset] = {"values": name_value_lines(str(printed)), "pairs": read_csv(out / "pairs.csv"),
-                           "frames": read_csv(out / "frames.csv")}
-    return studies
+        printed = runner.run("cge_loop_study", "--dataset", sequences[preset], "--out", out, "--force", "--step",
+                             plan.study_step, log=log)
+        return {"values": name_value_lines(str(printed)), "pairs": read_csv(out / "pairs.csv"),
+                "frames": read_csv(out / "frames.csv")}
+
+    return dict(zip(LOOP_PRESETS, runner.parallel([partial(one, p) for p in LOOP_PRESETS], jobs)))
 
 
 def fmt_m(value) -> str:
@@ -205,10 +229,15 @@ def main() -> int:
                         help="where RESULTS.md and results/*.png are written (docs/ for the published ones)")
     parser.add_argument("--work", type=Path, help="scratch folder for sequences and runs (default: OUT/../results-work)")
     parser.add_argument("--quick", action="store_true", help="short sequences: checks the suite, not the method")
+    parser.add_argument("--jobs", type=int, default=min(os.cpu_count() or 1, 4),
+                        help="tool runs at a time (each is single threaded; default: cores, at most 4)")
     parser.add_argument("--verbose", action="store_true", help="print every command")
     args = parser.parse_args()
 
     plan = QUICK if args.quick else FULL
+    if args.jobs < 1:
+        print("make_results.py: --jobs must be at least 1", file=sys.stderr)
+        return 2
     out = args.out.resolve()
     work = (args.work or out.parent / "results-work").resolve()
     if work == out or work == out / "results":
@@ -230,17 +259,17 @@ def main() -> int:
 
         t = time.monotonic()
         print("walking presets x modes", flush=True)
-        walking = walking_runs(runner, plan)
+        walking = walking_runs(runner, plan, args.jobs)
         steps["walking runs"] = time.monotonic() - t
 
         t = time.monotonic()
         print("loop scenes x loop scorings", flush=True)
-        loops = loop_runs(runner, plan, vocabulary)
+        loops = loop_runs(runner, plan, vocabulary, args.jobs)
         steps["loop runs"] = time.monotonic() - t
 
         t = time.monotonic()
         print("entropy study", flush=True)
-        study = entropy_study(runner, plan)
+        study = entropy_study(runner, plan, args.jobs)
         steps["entropy study"] = time.monotonic() - t
     except ToolError as e:
         print(f"make_results.py: {e}", file=sys.stderr)
@@ -256,7 +285,7 @@ def main() -> int:
 
     context = results_report.Context(
         plan=plan, quick=args.quick, walking=walking, loops=loops, study=study, figures=figures,
-        figures_prefix=figures_dir.name, steps=steps, machine=machine_description(),
+        figures_prefix=figures_dir.name, steps=steps, machine=machine_description(), jobs=args.jobs,
         commands=runner.commands, walking_presets=WALKING_PRESETS, modes=MODES, loop_presets=LOOP_PRESETS,
         loop_scorings=LOOP_SCORINGS)
     report = out / "RESULTS.md"

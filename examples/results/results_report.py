@@ -33,6 +33,7 @@ class Context:
     figures_prefix: str
     steps: dict
     machine: str
+    jobs: int
     commands: list
     walking_presets: list
     modes: list
@@ -197,7 +198,8 @@ def timing_section(ctx: Context) -> list[str]:
              "Median milliseconds per frame (mean in brackets), mode YMK; the loop scenes with loop closing "
              "and correction (pose graph + global bundle adjustment, which runs on few frames: its median "
              "is 0, its mean shows the cost). Segmentation here is reading the simulated masks, not a "
-             "network. Measured one run at a time on: " + ctx.machine + ".", ""]
+             "network. Measured with " + (f"{ctx.jobs} runs at a time (each single threaded, on a core of its own)"
+             if ctx.jobs > 1 else "one run at a time") + " on: " + ctx.machine + ".", ""]
     rows = []
     for stage in stages:
         row = [stage]
