@@ -41,9 +41,7 @@ constexpr int kExitUsage = 2;
 constexpr const char* kProgram = "cge_entropy";
 
 /// A bad input or flag value, reported on stderr with exit code 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using cge_tool::UsageError;
 
 struct Options {
   std::string file = "-";
@@ -201,14 +199,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->needs(points);
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    // --help and --version exit 0; every real parse error (unknown flag, bad value) exits 2.
-    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
-    return kExitUsage;
-  }
+  if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
   // The validators above admit only these names.
   opt.coeff = coeff == "lin"     ? cge::CoefficientKind::linear
               : coeff == "const" ? cge::CoefficientKind::constant

@@ -61,9 +61,7 @@ constexpr const char* kProgram = "cge_eval";
 namespace m = cge::metrics;
 
 /// A bad flag value or an unusable input, reported on stderr with exit code 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using cge_tool::UsageError;
 
 /// An output file that cannot be written: exit code 1.
 struct OutputError : std::runtime_error {
@@ -427,14 +425,7 @@ int main(int argc, char** argv) {
   add_common(map);
 #endif
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    // --help and --version exit 0; every real parse error (unknown flag, bad value) exits 2.
-    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
-    return kExitUsage;
-  }
+  if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
 
   try {
     nlohmann::ordered_json inputs;

@@ -54,9 +54,8 @@ namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;  // keys in insertion order: the output's order is fixed
 using Clock = std::chrono::steady_clock;
 
-constexpr int kExitOk = 0;
-constexpr int kExitFailure = 1;
-constexpr int kExitUsage = 2;
+using cge_tool::kExitFailure;
+using cge_tool::kExitOk;
 constexpr const char* kProgram = "cge_frontend";
 
 // Defaults of the flags.
@@ -86,9 +85,7 @@ constexpr double kFontScale = 0.45;
 constexpr int kTextPaddingPx = 3;
 
 /// A bad flag or input, reported on stderr with exit code 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using cge_tool::UsageError;
 
 struct Options {
   std::string rgb, depth, model, masks, out_image;
@@ -467,25 +464,7 @@ int main(int argc, char** argv) {
                                           "write a picture of the result here (never over a file without --force)");
   app.add_flag("--force", opt.force, "let --out-image replace an existing file")->needs(out_image);
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    // --help and --version exit 0; every real parse error (unknown flag, bad value) exits 2.
-    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
-    return kExitUsage;
-  }
+  if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
 
-  try {
-    return run(opt);
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitUsage;
-  } catch (const std::invalid_argument& e) {  // the segmenters' and the filter's messages name the item
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitUsage;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitFailure;
-  }
+  return cge_tool::run_reporting_errors(kProgram, nullptr, [&] { return run(opt); });
 }

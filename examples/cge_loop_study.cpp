@@ -64,9 +64,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kExitOk = 0;
-constexpr int kExitFailure = 1;
-constexpr int kExitUsage = 2;
+using cge_tool::kExitFailure;
+using cge_tool::kExitOk;
 constexpr const char* kProgram = "cge_loop_study";
 constexpr const char* kFramesFile = "frames.csv";
 constexpr const char* kPairsFile = "pairs.csv";
@@ -74,9 +73,7 @@ constexpr const char* kSummaryFile = "summary.json";
 
 cge_tool::ProgressBar progress_bar{kProgram};  // drawn only on a terminal
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using cge_tool::UsageError;
 
 struct Options {
   std::string dataset;
@@ -410,26 +407,6 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--mode", opt.mode, "dynamic labelling as cge_slam: none, Y, YM, YMK")->capture_default_str();
   app.add_option("--seed", opt.seed, "seed of the MAD samples (as cge_slam --seed)")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
-    return kExitUsage;
-  }
-  try {
-    return run(opt);
-  } catch (const UsageError& e) {
-    progress_bar.end_line();
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitUsage;
-  } catch (const std::invalid_argument& e) {
-    progress_bar.end_line();
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitUsage;
-  } catch (const std::exception& e) {
-    progress_bar.end_line();
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitFailure;
-  }
+  if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
+  return cge_tool::run_reporting_errors(kProgram, &progress_bar, [&] { return run(opt); });
 }

@@ -39,9 +39,9 @@
 
 namespace {
 
-constexpr int kExitOk = 0;
-constexpr int kExitFailure = 1;
-constexpr int kExitUsage = 2;
+using cge_tool::kExitFailure;
+using cge_tool::kExitOk;
+using cge_tool::kExitUsage;
 constexpr const char* kProgram = "cge_sim";
 // Frames encoded at the same time while the next one renders: two keep two cores busy when the
 // renderer takes less time than an encoding; each frame in flight holds ~3 MB.
@@ -50,9 +50,7 @@ constexpr int kFramesInFlight = 2;
 cge_tool::ProgressBar progress_bar{kProgram};  // drawn only on a terminal
 
 /// A bad input or flag value, reported on stderr with exit code 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using cge_tool::UsageError;
 
 struct Options {
   std::string preset;
@@ -237,18 +235,5 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
 
-  try {
-    return run(opt);
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitUsage;
-  } catch (const std::invalid_argument& e) {
-    progress_bar.end_line();
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitUsage;
-  } catch (const std::exception& e) {
-    progress_bar.end_line();
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitFailure;
-  }
+  return cge_tool::run_reporting_errors(kProgram, &progress_bar, [&] { return run(opt); });
 }

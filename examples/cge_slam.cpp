@@ -70,18 +70,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kExitOk = 0;
-constexpr int kExitFailure = 1;
-constexpr int kExitUsage = 2;
+using cge_tool::kExitFailure;
+using cge_tool::kExitOk;
 constexpr const char* kProgram = "cge_slam";
 constexpr const char* kDefaultPreset = "walking_xyz";
 constexpr int kDefaultPresetFrames = 300;  // 10 s at 30 fps when --frames is not given
 
 cge_tool::ProgressBar progress_bar{kProgram};  // drawn only on a terminal
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using cge_tool::UsageError;
 
 struct Options {
   std::string dataset;
@@ -647,26 +644,6 @@ int main(int argc, char** argv) {
                "map_top.png; their figures go to summary.json (docs/MAPS.md)");
   app.add_flag("--force", opt.force, "write into a non-empty folder: replace cge_slam's own files, delete nothing");
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
-    return kExitUsage;
-  }
-  try {
-    return run(opt);
-  } catch (const UsageError& e) {
-    progress_bar.end_line();
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitUsage;
-  } catch (const std::invalid_argument& e) {
-    progress_bar.end_line();
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitUsage;
-  } catch (const std::exception& e) {
-    progress_bar.end_line();
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitFailure;
-  }
+  if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
+  return cge_tool::run_reporting_errors(kProgram, &progress_bar, [&] { return run(opt); });
 }

@@ -23,15 +23,14 @@
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
 #include "cge/slam/vocabulary_training.hpp"
+#include "tool_support.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
 constexpr const char* kProgram = "cge_vocab";
-constexpr int kExitOk = 0;
-constexpr int kExitFailure = 1;
-constexpr int kExitUsage = 2;
+using cge_tool::kExitOk;
 
 struct Options {
   std::string images_dir;
@@ -182,20 +181,6 @@ int main(int argc, char** argv) {
   app.add_option("--max-images", opt.max_images, "use at most this many images (0: all)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
-    return kExitUsage;
-  }
-  try {
-    return run(opt);
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitUsage;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: error: %s\n", kProgram, e.what());
-    return kExitFailure;
-  }
+  if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
+  return cge_tool::run_reporting_errors(kProgram, nullptr, [&] { return run(opt); });
 }

@@ -1,13 +1,28 @@
 #pragma once
-// Small pieces every command-line tool of examples/ needs the same way: a one-line progress bar
-// on a terminal, and the final check that standard output really was written. Private to the
-// tools (not installed, not part of the library).
+// Small pieces every command-line tool of examples/ needs the same way: the exit codes, parsing
+// and error reporting around a tool's body, a one-line progress bar on a terminal, and the final
+// check that standard output really was written. Private to the tools (not installed, not part of
+// the library).
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <stdexcept>
 #include <string>
 
+#include <CLI/CLI.hpp>
+
 namespace cge_tool {
+
+/// Exit codes of the tools: success; a failure while running (e.g. a file that cannot be
+/// written); bad usage or input, found before anything is written.
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;
+constexpr int kExitUsage = 2;
+
+/// Bad usage found after parsing (a missing input, a value out of range): exit code kExitUsage.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 /// A progress bar redrawn in place on standard error: "<program>: [=====>    ] done/total frames  t s".
 /// The caller draws it only when standard error is a terminal.
@@ -46,6 +61,42 @@ inline bool standard_output_written(const char* program) {
   if (std::cout && !std::ferror(stdout)) return true;
   std::fprintf(stderr, "%s: error: cannot write to standard output\n", program);
   return false;
+}
+
+/// Parses the command line as every tool does. Returns -1 when the tool should go on; otherwise
+/// the exit code: 0 after --help or --version (CLI11 printed them), kExitUsage after a parse error
+/// (unknown flag, bad value), with the message and a hint on standard error.
+inline int parse_command_line(CLI::App& app, int argc, char** argv, const char* program) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", program, e.what());
+    return kExitUsage;
+  }
+  return -1;
+}
+
+/// Runs a tool's body (returning its exit code) and turns what it throws into "<program>: error:
+/// <message>" on standard error and an exit code: UsageError and std::invalid_argument (bad input,
+/// whose message names the item) kExitUsage, any other std::exception kExitFailure. `progress`
+/// (may be null) has its unfinished line ended first, so the message starts on a line of its own.
+template <class Body>
+int run_reporting_errors(const char* program, ProgressBar* progress, Body&& body) {
+  const auto report = [&](const std::exception& e, int exit_code) {
+    if (progress != nullptr) progress->end_line();
+    std::fprintf(stderr, "%s: error: %s\n", program, e.what());
+    return exit_code;
+  };
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    return report(e, kExitUsage);
+  } catch (const std::invalid_argument& e) {
+    return report(e, kExitUsage);
+  } catch (const std::exception& e) {
+    return report(e, kExitFailure);
+  }
 }
 
 }  // namespace cge_tool
