@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,7 @@
 #include "cge/core/mask.hpp"
 #include "cge/frontend/depth_mad_filter.hpp"
 #include "cge/opencv.hpp"
+#include "cge/opencv/disc_kernel.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -193,6 +195,24 @@ TEST_CASE("cv::Rect converts to PixelBox without offsets", "[opencv][adapters][b
   REQUIRE(fractional.y_max_px() == 6.75);
   const cv::Rect2d back = cge::opencv::to_rect2d(fractional);
   REQUIRE(back == cv::Rect2d(1.5, 2.25, 3.0, 4.5));
+}
+
+TEST_CASE("disc_kernel: the Euclidean disc, hand-worked at radii 0, 1 and 2", "[opencv][adapters][disc]") {
+  const auto rows = [](const cv::Mat& k) {
+    std::vector<std::string> out;
+    for (int y = 0; y < k.rows; ++y) {
+      std::string row;
+      for (int x = 0; x < k.cols; ++x) row += k.at<std::uint8_t>(y, x) ? '#' : '.';
+      out.push_back(row);
+    }
+    return out;
+  };
+  CHECK(rows(cge::opencv::disc_kernel(0)) == std::vector<std::string>{"#"});
+  CHECK(rows(cge::opencv::disc_kernel(1)) == std::vector<std::string>{".#.", "###", ".#."});
+  // Radius 2: the corners (dx, dy) = (+-2, +-1), (+-1, +-2) lie at sqrt(5) > 2, outside.
+  CHECK(rows(cge::opencv::disc_kernel(2)) == std::vector<std::string>{"..#..", ".###.", "#####", ".###.", "..#.."});
+  CHECK(cge::opencv::disc_kernel(3).type() == CV_8UC1);
+  CHECK_THROWS_AS(cge::opencv::disc_kernel(-1), std::invalid_argument);
 }
 
 TEST_CASE("DepthMADFilter through the adapters equals the core types bit for bit", "[opencv][adapters][depth_mad]") {

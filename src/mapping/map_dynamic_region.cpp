@@ -8,6 +8,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "cge/opencv/disc_kernel.hpp"
+
 namespace cge {
 namespace mapping {
 
@@ -50,11 +52,7 @@ cv::Mat dynamic_region(const cv::Mat& dynamic_mask, const cv::Mat& depth_m, cons
 
   // 1. The mask and its rim: dilation by a Euclidean disc (pixels outside the image are ignored).
   if (s.edge_dilation_px > 0) {
-    const int r = s.edge_dilation_px;
-    cv::Mat disc(2 * r + 1, 2 * r + 1, CV_8UC1, cv::Scalar(0));
-    for (int dy = -r; dy <= r; ++dy)
-      for (int dx = -r; dx <= r; ++dx) disc.at<std::uint8_t>(dy + r, dx + r) = dx * dx + dy * dy <= r * r ? 1 : 0;
-    cv::dilate(binary, region, disc);
+    cv::dilate(binary, region, opencv::disc_kernel(s.edge_dilation_px));
   } else {
     binary.copyTo(region);
   }

@@ -9,6 +9,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "cge/opencv/disc_kernel.hpp"
+
 namespace cge {
 namespace sim {
 namespace {
@@ -72,16 +74,6 @@ struct Box {
 };
 
 /// The Euclidean disc of radius r as a structuring element: offsets with dx^2 + dy^2 <= r^2.
-cv::Mat disc_kernel(int radius_px) {
-  cv::Mat k(2 * radius_px + 1, 2 * radius_px + 1, CV_8UC1, cv::Scalar(0));
-  for (int dy = -radius_px; dy <= radius_px; ++dy) {
-    for (int dx = -radius_px; dx <= radius_px; ++dx) {
-      if (dx * dx + dy * dy <= radius_px * radius_px) k.at<std::uint8_t>(dy + radius_px, dx + radius_px) = 1;
-    }
-  }
-  return k;
-}
-
 void require_probability(const char* name, double p) {
   if (!(p >= 0.0 && p <= 1.0)) {
     throw std::invalid_argument(std::string("SegmentationErrorSettings::") + name + " must be in [0, 1], got " +
@@ -104,7 +96,7 @@ void offset_boundary(const cv::Mat& truth, cv::Mat& out, std::uint16_t id, const
   cv::Mat out_roi = out(roi);
   cv::Mat inside;
   cv::compare(truth_roi, cv::Scalar(id), inside, cv::CMP_EQ);  // 255 on the instance
-  const cv::Mat kernel = disc_kernel(radius);
+  const cv::Mat kernel = opencv::disc_kernel(radius);
   cv::Mat moved;
   if (offset_px > 0) {
     // Outside the image is not the instance: nothing grows in from the border.
