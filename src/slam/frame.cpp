@@ -83,10 +83,7 @@ Frame FrameMaker::extract(int index, double timestamp_s, const cv::Mat& bgr, con
   f.points_camera_m.assign(f.keypoints.size(), Eigen::Vector3d(nan, nan, nan));
   for (std::size_t i = 0; i < f.keypoints.size(); ++i) {
     const cv::Point2f& p = f.keypoints[i].pt;
-    // The keypoint's pixel: nearest centre, as the MAD filter reads it.
-    const int col = std::clamp(static_cast<int>(std::lround(p.x)), 0, f.depth_m.cols - 1);
-    const int row = std::clamp(static_cast<int>(std::lround(p.y)), 0, f.depth_m.rows - 1);
-    const double d = f.depth_m.at<float>(row, col);
+    const double d = f.depth_m.at<float>(opencv::nearest_pixel(p, f.depth_m.size()));
     if (std::isfinite(d) && d > settings_.frame.min_depth_m && d < settings_.frame.max_depth_m) {
       f.points_camera_m[i] = intrinsics_.backproject(p.x, p.y, d);
     }
@@ -104,10 +101,8 @@ void FrameMaker::label(Frame& frame, const std::vector<SegmentedInstance>& insta
   if (!uses_mad(mode)) {
     // Mask test only (step 1 of the filter), on the pixel the filter would read.
     for (std::size_t i = 0; i < frame.keypoints.size(); ++i) {
-      const cv::Point2f& p = frame.keypoints[i].pt;
-      const int col = std::clamp(static_cast<int>(std::lround(p.x)), 0, frame.image_size.width - 1);
-      const int row = std::clamp(static_cast<int>(std::lround(p.y)), 0, frame.image_size.height - 1);
-      if (frame.dynamic_mask.at<std::uint8_t>(row, col) != 0) frame.labels[i] = FeatureLabel::dynamic_by_mask;
+      const cv::Point pixel = opencv::nearest_pixel(frame.keypoints[i].pt, frame.image_size);
+      if (frame.dynamic_mask.at<std::uint8_t>(pixel) != 0) frame.labels[i] = FeatureLabel::dynamic_by_mask;
     }
     return;
   }

@@ -1,10 +1,10 @@
 #include "cge/slam/moving_keypoints.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+
+#include "cge/opencv/keypoint.hpp"
 
 namespace cge {
 namespace slam {
@@ -20,10 +20,7 @@ MovingKeypointCounts count_moving_keypoints(const std::vector<cv::KeyPoint>& key
   }
   MovingKeypointCounts counts;
   for (std::size_t i = 0; i < keypoints.size(); ++i) {
-    const cv::Point2f& p = keypoints[i].pt;
-    const int col = std::clamp(static_cast<int>(std::lround(p.x)), 0, moving_mask.cols - 1);
-    const int row = std::clamp(static_cast<int>(std::lround(p.y)), 0, moving_mask.rows - 1);
-    if (moving_mask.at<std::uint8_t>(row, col) == 0) continue;
+    if (moving_mask.at<std::uint8_t>(opencv::nearest_pixel(keypoints[i].pt, moving_mask.size())) == 0) continue;
     ++counts.moving_keypoints;
     counts.moving_kept += labels[i] == FeatureLabel::static_feature;
   }

@@ -3,6 +3,9 @@
 // std::vector<cv::KeyPoint> from any OpenCV detector goes straight into the components.
 // Coordinates are OpenCV's: pixel centres at integer coordinates.
 
+#include <algorithm>
+#include <cmath>
+
 #include <opencv2/core/types.hpp>
 
 #include "cge/core/point_traits.hpp"
@@ -25,4 +28,15 @@ struct Point2<cv::Point_<T>> {
 };
 
 }  // namespace traits
+
+namespace opencv {
+
+/// The pixel a keypoint falls on, as DepthMADFilter reads it: the nearest pixel centre (std::lround:
+/// halves away from zero), clamped into an image of `size` (cols = width, rows = height).
+inline cv::Point nearest_pixel(const cv::Point2f& p, cv::Size size) {
+  return {std::clamp(static_cast<int>(std::lround(p.x)), 0, size.width - 1),
+          std::clamp(static_cast<int>(std::lround(p.y)), 0, size.height - 1)};
+}
+
+}  // namespace opencv
 }  // namespace cge
