@@ -260,7 +260,7 @@ bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::I
 
 bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction,
                                Attempt& out) const {
-  if (last_keypoints_.empty()) return false;
+  if (last_points_camera_m_.empty()) return false;
   // Projection matching of the previous frame's static keypoints with depth (temporary points, as
   // ORB-SLAM2's RGB-D motion model does) within the wide window: one frame of motion at most.
   const KeypointGrid grid(frame);
@@ -268,7 +268,7 @@ bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::
   const double radius_px = settings_.search_radius_px * settings_.wide_search_factor;
   std::vector<int> best_distance(static_cast<std::size_t>(frame.size()), INT_MAX);
   std::vector<int> source(static_cast<std::size_t>(frame.size()), -1);
-  for (std::size_t k = 0; k < last_keypoints_.size(); ++k) {
+  for (std::size_t k = 0; k < last_points_camera_m_.size(); ++k) {
     const Eigen::Vector3d p_world = T_world_last_ * last_points_camera_m_[k];
     const Eigen::Vector3d p_camera = T_camera_world * p_world;
     if (p_camera.z() < kMinPointDepthM) continue;
@@ -348,12 +348,10 @@ bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::
 }
 
 void Tracker::remember_last_frame(const Frame& frame) {
-  last_keypoints_.clear();
   last_points_camera_m_.clear();
   last_descriptors_ = cv::Mat();
   for (int i = 0; i < frame.size(); ++i) {
     if (!frame.is_static(i) || !frame.has_depth(i)) continue;
-    last_keypoints_.push_back(i);
     last_points_camera_m_.push_back(frame.points_camera_m[static_cast<std::size_t>(i)]);
     last_descriptors_.push_back(frame.descriptors.row(i));
   }
@@ -447,7 +445,8 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
   if (!ok) {
     T_last_current_velocity_ = Eigen::Isometry3d::Identity();  // the motion model is stale now
     last_has_pose_ = false;
-    last_keypoints_.clear();
+    last_points_camera_m_.clear();
+    last_descriptors_ = cv::Mat();
     return result;
   }
   remember_last_frame(frame);

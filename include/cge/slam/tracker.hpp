@@ -117,9 +117,8 @@ class Tracker {
   CandidateSource candidate_source_;
   /// The previous frame had a pose: the frame-to-frame motion is known (else the last pose is stale).
   bool last_has_pose_ = false;
-  // The previous frame's static keypoints with depth (odometry fallback): index, camera-frame
-  // point (its world position is T_world_last_ * point, so a map correction moves it too), descriptor.
-  std::vector<int> last_keypoints_;
+  // The previous frame's static keypoints with depth (odometry fallback): camera-frame point (its
+  // world position is T_world_last_ * point, so a map correction moves it too) and descriptor row.
   std::vector<Eigen::Vector3d> last_points_camera_m_;
   cv::Mat last_descriptors_;
   Eigen::Isometry3d T_world_last_ = Eigen::Isometry3d::Identity();
