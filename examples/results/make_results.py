@@ -21,7 +21,6 @@ import json
 import math
 import os
 import platform
-import shutil
 import subprocess
 import sys
 import time
@@ -148,7 +147,7 @@ def walking_runs(runner: Runner, plan: Plan, jobs: int) -> dict:
         out = runner.work / "runs" / preset / mode
         map_flags = ["--map"] if preset == "walking_xyz" else []
         summary = slam(runner, log, sequence, out, "--mode", mode, "--seed", str(plan.seed), *map_flags)
-        run = {"summary": summary, "dir": out, "sequence": sequence}
+        run = {"summary": summary}
         aligned = out / "aligned.csv"
         runner.run("cge_eval", "ate", sequence / "groundtruth.txt", out / "trajectory.txt", "--aligned-out", aligned,
                    "--force", log=log)
@@ -181,7 +180,7 @@ def loop_runs(runner: Runner, plan: Plan, vocabulary: Path, jobs: int) -> dict:
         curve_file = out / "pr_curve.csv"
         runner.run("cge_eval", "loops", sequence / "loops.txt", out / "loops.csv", "--score", score_column,
                    "--curve", curve_file, "--force", log=log)
-        return {"summary": summary, "loops": evaluation, "curve": read_csv(curve_file), "score_column": score_column}
+        return {"summary": summary, "loops": evaluation, "curve": read_csv(curve_file)}
 
     keys = [(preset, scoring) for preset in LOOP_PRESETS for scoring in LOOP_SCORINGS]
     runs = dict(zip(keys, runner.parallel([partial(one, *key) for key in keys], jobs)))
@@ -199,8 +198,7 @@ def entropy_study(runner: Runner, plan: Plan, jobs: int) -> dict:
         out = runner.work / "study" / preset
         printed = runner.run("cge_loop_study", "--dataset", sequences[preset], "--out", out, "--force", "--step",
                              plan.study_step, log=log)
-        return {"values": name_value_lines(str(printed)), "pairs": read_csv(out / "pairs.csv"),
-                "frames": read_csv(out / "frames.csv")}
+        return {"values": name_value_lines(str(printed)), "pairs": read_csv(out / "pairs.csv")}
 
     return dict(zip(LOOP_PRESETS, runner.parallel([partial(one, p) for p in LOOP_PRESETS], jobs)))
 

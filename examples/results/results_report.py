@@ -6,7 +6,7 @@ which exponent scaling separates better) are computed from those numbers here, n
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 # What the issues quote from the paper (Wang & Luo 2025). Its tables themselves were not available
 # to us; RESULTS.md says so instead of inventing them.
@@ -39,7 +39,6 @@ class Context:
     modes: list
     loop_presets: list
     loop_scorings: list
-    lines: list = field(default_factory=list)
 
 
 def is_number(v) -> bool:
