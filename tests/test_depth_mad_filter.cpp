@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cge/core/mask.hpp"
+#include "cge/core/nearest_pixel.hpp"
 #include "cge/core/uniform_double.hpp"
 #include "cge/frontend/depth_image.hpp"
 #include "cge/frontend/depth_mad_filter.hpp"
@@ -778,4 +779,21 @@ TEST_CASE("bad input: clear errors naming the item", "[depth_mad][errors]") {
     const DepthMADResult r = f.filter(Keypoints{{5, 5}}, nan_depth, Instances{});
     REQUIRE(r.labels[0] == FeatureLabel::static_feature);
   }
+}
+
+TEST_CASE("nearest_pixel_index: hand-worked roundings and clamps", "[depth_mad][core]") {
+  using cge::nearest_pixel_index;
+  // Pixel i has its centre at i: halves go away from zero, the value just below a half goes down.
+  CHECK(nearest_pixel_index(0.0, 640) == 0);
+  CHECK(nearest_pixel_index(std::nextafter(0.5, 0.0), 640) == 0);
+  CHECK(nearest_pixel_index(0.5, 640) == 1);
+  CHECK(nearest_pixel_index(2.5, 640) == 3);
+  CHECK(nearest_pixel_index(2.4999, 640) == 2);
+  CHECK(nearest_pixel_index(638.6, 640) == 639);
+  // The far border (a keypoint exactly on x = width is inside the image) and beyond clamp to the last
+  // pixel; small negative values clamp to the first.
+  CHECK(nearest_pixel_index(640.0, 640) == 639);
+  CHECK(nearest_pixel_index(700.0, 640) == 639);
+  CHECK(nearest_pixel_index(-0.7, 640) == 0);
+  CHECK(nearest_pixel_index(0.7, 1) == 0);
 }

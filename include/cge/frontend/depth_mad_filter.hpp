@@ -32,6 +32,7 @@
 
 #include "cge/core/concepts.hpp"
 #include "cge/core/mask.hpp"
+#include "cge/core/nearest_pixel.hpp"
 #include "cge/core/point_traits.hpp"
 #include "cge/core/uniform_double.hpp"
 #include "cge/frontend/depth_image.hpp"
@@ -226,9 +227,7 @@ class DepthMADFilter {
             << ") is not finite or lies outside the image [0, " << width << "] x [0, " << height << "]";
         throw std::invalid_argument(msg.str());
       }
-      // Nearest pixel centre; lround rounds the exact value, halves away from zero.
-      keypoint_pixels.push_back(Pixel{std::min(static_cast<int>(std::lround(x)), width - 1),
-                                      std::min(static_cast<int>(std::lround(y)), height - 1)});
+      keypoint_pixels.push_back(Pixel{nearest_pixel_index(x, width), nearest_pixel_index(y, height)});
       ++index;
     }
 

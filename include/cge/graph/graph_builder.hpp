@@ -26,6 +26,7 @@
 #include "cge/core/concepts.hpp"
 #include "cge/core/image_region.hpp"
 #include "cge/core/mask.hpp"
+#include "cge/core/nearest_pixel.hpp"
 #include "cge/core/point_traits.hpp"
 #include "cge/core/semantic_instance.hpp"
 #include "cge/graph/graph.hpp"
@@ -274,10 +275,8 @@ class GraphBuilder {
       ++index;
       const Point rel = p - image.origin_px;
       if (!own_empty || !partner_empty) {
-        // Nearest pixel centre; lround rounds the exact value (floor(x + 0.5) would round
-        // 0.49999999999999994 up, as x + 0.5 rounds to 1).
-        const int col = std::min(static_cast<int>(std::lround(rel.x())), mask_w - 1);
-        const int row = std::min(static_cast<int>(std::lround(rel.y())), mask_h - 1);
+        const int col = nearest_pixel_index(static_cast<double>(rel.x()), mask_w);
+        const int row = nearest_pixel_index(static_cast<double>(rel.y()), mask_h);
         if (!own_empty && traits::Mask<OwnMask>::is_set(own_dynamic_mask, col, row)) continue;
         if (!partner_empty && traits::Mask<PartnerMask>::is_set(partner_dynamic_mask, col, row)) continue;
       }

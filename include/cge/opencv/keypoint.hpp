@@ -3,11 +3,9 @@
 // std::vector<cv::KeyPoint> from any OpenCV detector goes straight into the components.
 // Coordinates are OpenCV's: pixel centres at integer coordinates.
 
-#include <algorithm>
-#include <cmath>
-
 #include <opencv2/core/types.hpp>
 
+#include "cge/core/nearest_pixel.hpp"
 #include "cge/core/point_traits.hpp"
 
 namespace cge {
@@ -31,11 +29,10 @@ struct Point2<cv::Point_<T>> {
 
 namespace opencv {
 
-/// The pixel a keypoint falls on, as DepthMADFilter reads it: the nearest pixel centre (std::lround:
-/// halves away from zero), clamped into an image of `size` (cols = width, rows = height).
+/// The pixel a keypoint falls on, as DepthMADFilter reads it (cge/core/nearest_pixel.hpp), clamped
+/// into an image of `size` (cols = width, rows = height).
 inline cv::Point nearest_pixel(const cv::Point2f& p, cv::Size size) {
-  return {std::clamp(static_cast<int>(std::lround(p.x)), 0, size.width - 1),
-          std::clamp(static_cast<int>(std::lround(p.y)), 0, size.height - 1)};
+  return {nearest_pixel_index(p.x, size.width), nearest_pixel_index(p.y, size.height)};
 }
 
 }  // namespace opencv
