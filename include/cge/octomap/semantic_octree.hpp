@@ -7,7 +7,7 @@
 // rule (applied in one depth-first walk over the scan's cells in Morton order, see update_leaves):
 // voxels on the rays from the origin get a miss, the voxels of the points (within max range) a hit,
 // L(n | z_1:t+1) = L(n | z_1:t) + L(n | z_t+1), clamped; a cell is updated once per scan, hits win.
-// To save time, free space is carved by one ray per block of ray_block_voxels^3 end voxels.
+// Optionally (ray_block_voxels > 1) free space is carved by one ray per block of end voxels only.
 // Each end voxel also counts votes for the class labels of the points in it; the node's colour is
 // the preset colour of the label with the most votes over all scans so far (ties: the smaller
 // label), so the class can be read back from the colour (class_label_of_colour). Colours are set,
@@ -48,9 +48,11 @@ struct SemanticOctreeSettings {
   double occupancy_threshold = 0.5;  ///< a voxel above this probability is occupied
   /// Free space: one ray per block of n x n x n end voxels (to the first end voxel of the block in
   /// key order) instead of one per end voxel. 1 = every end voxel (OctoMap's insertPointCloud with
-  /// discretize); 2 casts about 4 times fewer rays on surfaces, leaving some free voxels next to
-  /// surfaces unknown. Every end voxel still gets its hit. >= 1.
-  int ray_block_voxels = 2;
+  /// discretize); 2 casts about 4 times fewer rays on surfaces but leaves voxels next to surfaces
+  /// uncarved: on walking_xyz a person's lower body from a frame whose instance was missed or whose
+  /// feet were lost stayed occupied, no later ray crossing it (docs/MAPS.md). Every end voxel
+  /// still gets its hit. >= 1.
+  int ray_block_voxels = 1;
 };
 
 /// Throws std::invalid_argument naming the first setting out of range.
