@@ -481,20 +481,34 @@ TEST_CASE("Ghost set at given frame poses: one frame by brute force, moved poses
   const Scene& s = scene();
   const cge::dataset::TumSequence seq(s.folder);
   const auto& truth = seq.ground_truth();
-  const int frame = 30;  // a frame with both people in view
+  std::set<std::uint16_t> moving;
+  for (const auto& i : s.instances) {
+    if (i.moving) moving.insert(static_cast<std::uint16_t>(i.id));
+  }
+  // The frame with the most pixels of moving people.
+  const auto ids_of = [&](int i) {
+    return cv::imread((s.folder / "masks" / (seq.load(i).rgb_stem + ".png")).string(), cv::IMREAD_UNCHANGED);
+  };
+  int frame = 0, most = -1;
+  for (int i = 0; i < seq.frame_count(); ++i) {
+    const cv::Mat ids = ids_of(i);
+    int n = 0;
+    for (auto it = ids.begin<std::uint16_t>(); it != ids.end<std::uint16_t>(); ++it) n += moving.count(*it) > 0;
+    if (n > most) {
+      most = n;
+      frame = i;
+    }
+  }
+  INFO("frame " << frame << ", " << most << " pixels of moving people");
+  REQUIRE(most > 0);
   cge::mapping::GhostVoxelSettings one;
   one.frame_poses.push_back({seq.timestamp_s(frame), truth[static_cast<std::size_t>(frame)].T_world_camera});
   const cge::mapping::GhostVoxels got = cge::mapping::ghost_voxels_from_sequence(s.folder, 0.05, one);
   CHECK(got.frames == 1);
 
   // Oracle: that frame's pixels back-projected here, person and static voxels in std::set.
-  std::set<std::uint16_t> moving;
-  for (const auto& i : s.instances) {
-    if (i.moving) moving.insert(static_cast<std::uint16_t>(i.id));
-  }
-  const cge::dataset::TumFrame f = seq.load(frame);
-  const cv::Mat depth = f.depth_metres();
-  const cv::Mat ids = cv::imread((s.folder / "masks" / (f.rgb_stem + ".png")).string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat depth = seq.load(frame).depth_metres();
+  const cv::Mat ids = ids_of(frame);
   const Eigen::Isometry3d T = truth[static_cast<std::size_t>(frame)].T_world_camera;
   std::set<std::tuple<int, int, int>> person, still;
   for (int v = 0; v < depth.rows; ++v) {
