@@ -78,6 +78,23 @@ void BM_MapsRebuild(benchmark::State& state) {
 }
 BENCHMARK(BM_MapsRebuild)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond);
 
+/// rebuild() at the default strides with the octree's free-space carving at one ray per block of
+/// n^3 end voxels. Arg: ray_block_voxels (1 = a ray to every end voxel, OctoMap's insertPointCloud).
+void BM_MapsRebuildRayBlock(benchmark::State& state) {
+  const Data& d = data();
+  cge::mapping::SemanticMapSettings settings;
+  settings.octree.ray_block_voxels = static_cast<int>(state.range(0));
+  cge::mapping::SemanticMapBuilder builder(d.intrinsics, settings);
+  for (auto _ : state) {
+    builder.rebuild(d.keyframes);
+    benchmark::DoNotOptimize(builder.entities().data());
+  }
+  state.counters["s_per_keyframe"] =
+      benchmark::Counter(static_cast<double>(d.keyframes.size()),
+                         benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_MapsRebuildRayBlock)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
 /// The cloud's share of insert(): back-projection at stride 2 and the per-keyframe voxel filter.
 void BM_MapsCloudPart(benchmark::State& state) {
   const Data& d = data();

@@ -89,6 +89,7 @@ struct Options {
   std::string map_ot;
   std::string map_sequence;
   std::string map_trajectory;  // the map's trajectory (TUM): aligns the ghost set to the map's frame
+  std::string map_keyframes;   // the map's keyframe poses (TUM): the ghost set at those poses
   std::string map_image;
   std::size_t min_entity_voxels = 3;
 };
@@ -226,6 +227,7 @@ Values run_rpe(const Options& opt, nlohmann::ordered_json& inputs) {
 #ifdef CGE_EVAL_HAS_MAPS
 Values run_map(const Options& opt, nlohmann::ordered_json& inputs) {
   namespace mp = cge::mapping;
+  if (!opt.map_keyframes.empty() && opt.map_sequence.empty()) throw UsageError("map: --keyframes needs --sequence");
   const auto tree = cge::octomap_adapter::read_color_octree(opt.map_ot);
   inputs["map"] = opt.map_ot;
   const mp::OccupiedVoxels voxels = cge::octomap_adapter::occupied_voxels(*tree);
@@ -253,6 +255,17 @@ Values run_map(const Options& opt, nlohmann::ordered_json& inputs) {
         mp::ghost_voxels_from_sequence(opt.map_sequence, voxels.resolution_m, ghost_settings);
     v.push_back(real("ghost_fraction", mp::ghost_fraction(voxels, ghosts)));
     v.push_back(count("ghost_set_voxels", ghosts.ghost.size()));
+    v.push_back(count("ghost_voxels", mp::ghost_voxel_count(voxels, ghosts.ghost)));
+    if (!opt.map_keyframes.empty()) {
+      // The same measure over the keyframes only, each at the pose the map was built with.
+      inputs["keyframes"] = opt.map_keyframes;
+      mp::GhostVoxelSettings at_keyframes;
+      at_keyframes.frame_poses = read_trajectory(opt.map_keyframes, opt);
+      const mp::GhostVoxels kf = mp::ghost_voxels_from_sequence(opt.map_sequence, voxels.resolution_m, at_keyframes);
+      v.push_back(real("ghost_fraction_keyframe_poses", mp::ghost_fraction(voxels, kf)));
+      v.push_back(count("ghost_set_voxels_keyframe_poses", kf.ghost.size()));
+      v.push_back(count("ghost_voxels_keyframe_poses", mp::ghost_voxel_count(voxels, kf.ghost)));
+    }
   }
   if (!opt.map_image.empty()) {
     inputs["image"] = opt.map_image;
@@ -418,6 +431,9 @@ int main(int argc, char** argv) {
   map->add_option("--trajectory", opt.map_trajectory,
                   "with --sequence: the map's trajectory (TUM, e.g. cge_slam's trajectory.txt); the ghost set is "
                   "moved into the map's frame by the ATE alignment to the sequence's groundtruth.txt");
+  map->add_option("--keyframes", opt.map_keyframes,
+                  "with --sequence: the map's keyframe poses (TUM, e.g. cge_slam's keyframes.txt); also the ghost "
+                  "figures with the ghost set made from those frames at those poses (*_keyframe_poses, docs/MAPS.md)");
   map->add_option("--image", opt.map_image, "write a top-view PNG of the occupied voxels (never overwritten)");
   map->add_option("--min-entity-voxels", opt.min_entity_voxels,
                   "smaller connected same-class parts are not integrity entities")

@@ -17,6 +17,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <octomap/AbstractOcTree.h>
@@ -314,6 +315,29 @@ TEST_CASE("Integrity scores: hand-worked entities", "[maps]") {
         Approx(1.0 / 6));
 }
 
+TEST_CASE("Ghost set and ghost voxel count on hand-made voxel sets", "[maps]") {
+  const VoxelIndex a(0, 0, 0), b(1, 0, 0), c(0, 2, -1), d(-3, 1, 1), e(5, 5, 5);
+  // P = {c, a, b, a}, S = {b, d, b}: P \ S = {a, c}; voxel_less compares x, then y: a before c.
+  const std::vector<VoxelIndex> ghost = cge::mapping::ghost_set({c, a, b, a}, {b, d, b});
+  REQUIRE(ghost.size() == 2);
+  CHECK(ghost[0] == a);
+  CHECK(ghost[1] == c);
+  CHECK(cge::mapping::ghost_set({a, b}, {}).size() == 2);
+  CHECK(cge::mapping::ghost_set({}, {a}).empty());
+  CHECK(cge::mapping::ghost_set({a, b}, {b, a}).empty());
+
+  OccupiedVoxels map;
+  for (const VoxelIndex& i : {d, a, e}) {  // sorted: d (-3), a (0), e (5)
+    MapVoxel v;
+    v.index = i;
+    map.voxels.push_back(v);
+  }
+  CHECK(cge::mapping::ghost_voxel_count(map, ghost) == 1);  // a only
+  CHECK(cge::mapping::ghost_voxel_count(map, {}) == 0);
+  CHECK(cge::mapping::ghost_voxel_count(map, cge::mapping::ghost_set({a, d, e, b}, {})) == 3);
+  CHECK(cge::mapping::ghost_voxel_count(OccupiedVoxels{}, ghost) == 0);
+}
+
 TEST_CASE("Top view: the highest voxel wins, world y points up in the image", "[maps]") {
   OccupiedVoxels map;
   map.resolution_m = 1.0;
@@ -451,6 +475,97 @@ TEST_CASE("Semantic map: dynamic masks keep people out, ghost voxels only withou
   CHECK((f.integrity > 0 && f.integrity <= 1));
   WARN("integrity " << f.integrity << " fluctuation " << f.fluctuation << " entities " << f.entities << " memory "
                     << f.octree_memory_bytes);
+}
+
+TEST_CASE("Ghost set at given frame poses: one frame by brute force, moved poses, errors", "[maps]") {
+  const Scene& s = scene();
+  const cge::dataset::TumSequence seq(s.folder);
+  const auto& truth = seq.ground_truth();
+  std::set<std::uint16_t> moving;
+  for (const auto& i : s.instances) {
+    if (i.moving) moving.insert(static_cast<std::uint16_t>(i.id));
+  }
+  // The frame with the most pixels of moving people.
+  const auto ids_of = [&](int i) {
+    return cv::imread((s.folder / "masks" / (seq.load(i).rgb_stem + ".png")).string(), cv::IMREAD_UNCHANGED);
+  };
+  int frame = 0, most = -1;
+  for (int i = 0; i < seq.frame_count(); ++i) {
+    const cv::Mat ids = ids_of(i);
+    int n = 0;
+    for (auto it = ids.begin<std::uint16_t>(); it != ids.end<std::uint16_t>(); ++it) n += moving.count(*it) > 0;
+    if (n > most) {
+      most = n;
+      frame = i;
+    }
+  }
+  INFO("frame " << frame << ", " << most << " pixels of moving people");
+  REQUIRE(most > 0);
+  cge::mapping::GhostVoxelSettings one;
+  one.frame_poses.push_back({seq.timestamp_s(frame), truth[static_cast<std::size_t>(frame)].T_world_camera});
+  const cge::mapping::GhostVoxels got = cge::mapping::ghost_voxels_from_sequence(s.folder, 0.05, one);
+  CHECK(got.frames == 1);
+
+  // Oracle: that frame's pixels back-projected here, person and static voxels in std::set.
+  const cv::Mat depth = seq.load(frame).depth_metres();
+  const cv::Mat ids = ids_of(frame);
+  const Eigen::Isometry3d T = truth[static_cast<std::size_t>(frame)].T_world_camera;
+  std::set<std::tuple<int, int, int>> person, still;
+  for (int v = 0; v < depth.rows; ++v) {
+    for (int u = 0; u < depth.cols; ++u) {
+      const float z = depth.at<float>(v, u);
+      if (!(z > 0)) continue;
+      const Eigen::Vector3f pc(
+          (static_cast<float>(u) - static_cast<float>(s.intrinsics.cx_px)) * z / static_cast<float>(s.intrinsics.fx_px),
+          (static_cast<float>(v) - static_cast<float>(s.intrinsics.cy_px)) * z / static_cast<float>(s.intrinsics.fy_px),
+          z);
+      const VoxelIndex i = cge::mapping::voxel_of(T.linear().cast<float>() * pc + T.translation().cast<float>(), 0.05);
+      (moving.count(ids.at<std::uint16_t>(v, u)) ? person : still).insert({i.x(), i.y(), i.z()});
+    }
+  }
+  std::vector<std::tuple<int, int, int>> expected;
+  for (const auto& p : person) {
+    if (!still.count(p)) expected.push_back(p);
+  }
+  std::sort(expected.begin(), expected.end());
+  std::vector<std::tuple<int, int, int>> actual;
+  for (const VoxelIndex& i : got.ghost) actual.emplace_back(i.x(), i.y(), i.z());
+  std::sort(actual.begin(), actual.end());
+  CHECK(got.person_voxels == person.size());
+  CHECK(got.static_voxels == still.size());
+  REQUIRE(!expected.empty());
+  CHECK(actual == expected);
+
+  // Every frame at its ground-truth pose moved by T_map_world: the same set as the default measure
+  // with that T_map_world (a map in another frame), whose poses come from groundtruth.txt.
+  const Eigen::Isometry3d T_map_world =
+      Eigen::Translation3d(0.3, -0.2, 0.1) * Eigen::AngleAxisd(0.2, Eigen::Vector3d(1, 2, 3).normalized());
+  cge::mapping::GhostVoxelSettings moved, all_poses, identity;
+  moved.T_map_world = T_map_world;
+  for (int i = 0; i < seq.frame_count(); ++i) {
+    all_poses.frame_poses.push_back(
+        {seq.timestamp_s(i), T_map_world * truth[static_cast<std::size_t>(i)].T_world_camera});
+  }
+  moved.pixel_stride = all_poses.pixel_stride = identity.pixel_stride = 4;  // fewer pixels, same for all
+  const cge::mapping::GhostVoxels by_truth = cge::mapping::ghost_voxels_from_sequence(s.folder, 0.05, moved);
+  const cge::mapping::GhostVoxels at_poses = cge::mapping::ghost_voxels_from_sequence(s.folder, 0.05, all_poses);
+  CHECK(at_poses.frames == seq.frame_count());
+  CHECK(at_poses.person_voxels == by_truth.person_voxels);
+  CHECK(at_poses.static_voxels == by_truth.static_voxels);
+  REQUIRE(!by_truth.ghost.empty());
+  CHECK(at_poses.ghost == by_truth.ghost);
+  // The moved poses moved the set (not the identity's).
+  CHECK(at_poses.ghost != cge::mapping::ghost_voxels_from_sequence(s.folder, 0.05, identity).ghost);
+
+  // A pose at a time no frame has is an error naming it.
+  cge::mapping::GhostVoxelSettings wrong;
+  wrong.frame_poses.push_back({123456.0, Eigen::Isometry3d::Identity()});
+  CHECK_THROWS_WITH(cge::mapping::ghost_voxels_from_sequence(s.folder, 0.05, wrong),
+                    Catch::Contains("matches no frame"));
+  cge::mapping::GhostVoxelSettings nan_pose;
+  nan_pose.frame_poses.push_back({seq.timestamp_s(0), Eigen::Isometry3d::Identity()});
+  nan_pose.frame_poses.back().T_world_camera.translation().x() = std::nan("");
+  CHECK_THROWS_WITH(cge::mapping::ghost_voxels_from_sequence(s.folder, 0.05, nan_pose), Catch::Contains("not finite"));
 }
 
 TEST_CASE("Semantic map with segmentation errors: the grown dynamic region keeps the people out", "[maps]") {
@@ -623,6 +738,10 @@ TEST_CASE("SemanticOctree with one ray per end voxel equals OctoMap's own insert
   cge::octomap_adapter::SemanticOctreeSettings os;
   os.ray_block_voxels = 1;
   os.max_range_m = 20;  // every point within range: both cast to the centre of its voxel
+  // At 5 cm the cube of keys 20 m can reach is too large for the bit set that drops repeated ray
+  // cells (the sort alone deduplicates); at 10 cm the bit set is used.
+  os.resolution_m = GENERATE(0.05, 0.1);
+  INFO("resolution " << os.resolution_m);
   cge::octomap_adapter::SemanticOctree ours(os);
   octomap::ColorOcTree oracle(os.resolution_m);
   const cge::mapping::SemanticMapBuilder points_of(s.intrinsics, settings);

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -73,8 +74,15 @@ GhostVoxels ghost_voxels_from_sequence(const fs::path& folder, double resolution
     throw std::invalid_argument("ghost voxels: " + (folder / "masks").string() + " is missing");
   if (!sequence.camera_settings_file())
     throw std::invalid_argument("ghost voxels: " + (folder / "camera.yaml").string() + " is missing");
-  if (!sequence.has_ground_truth())
+  const bool own_poses = !settings.frame_poses.empty();
+  if (!own_poses && !sequence.has_ground_truth())
     throw std::invalid_argument("ghost voxels: " + (folder / "groundtruth.txt").string() + " is missing or empty");
+  for (const metrics::StampedPose& p : settings.frame_poses) {
+    if (!p.T_world_camera.matrix().allFinite() || !std::isfinite(p.timestamp_s)) {
+      throw std::invalid_argument("ghost voxels: the frame pose at " + std::to_string(p.timestamp_s) +
+                                  " s is not finite");
+    }
+  }
   const fs::path masks = *sequence.masks_folder();
   const std::set<std::uint16_t> moving = moving_ids(masks / "instances.csv");
   const dataset::OrbSlam2Settings camera = dataset::read_orbslam2_settings(*sequence.camera_settings_file());
@@ -84,15 +92,36 @@ GhostVoxels ghost_voxels_from_sequence(const fs::path& folder, double resolution
 
   GhostVoxels out;
   out.resolution_m = resolution_m;
-  std::vector<VoxelIndex> person, still, fresh_person, fresh_still;
-  for (int i = 0; i < sequence.frame_count(); ++i) {
-    const dataset::TumFrame frame = sequence.load(i);
-    const auto it = std::lower_bound(truth.begin(), truth.end(), frame.rgb_timestamp_s - settings.max_time_difference_s,
-                                     [](const dataset::GroundTruthPose& p, double t) { return p.timestamp_s < t; });
-    if (it == truth.end() || std::abs(it->timestamp_s - frame.rgb_timestamp_s) > settings.max_time_difference_s) {
-      throw std::invalid_argument("ghost voxels: no ground-truth pose for frame " + frame.rgb_stem + " in " +
-                                  (folder / "groundtruth.txt").string());
+  // The frames to use and their poses in the map's frame: (frame index, T_map_camera).
+  std::vector<std::pair<int, Eigen::Isometry3d>> used;
+  if (own_poses) {
+    for (const metrics::StampedPose& p : settings.frame_poses) {
+      int match = -1;
+      for (int i = 0; i < sequence.frame_count() && match < 0; ++i) {
+        if (std::abs(sequence.timestamp_s(i) - p.timestamp_s) <= settings.max_time_difference_s) match = i;
+      }
+      if (match < 0) {
+        throw std::invalid_argument("ghost voxels: the frame pose at " + std::to_string(p.timestamp_s) +
+                                    " s matches no frame of " + folder.string());
+      }
+      used.emplace_back(match, p.T_world_camera);
     }
+  } else {
+    for (int i = 0; i < sequence.frame_count(); ++i) {
+      const double t_s = sequence.timestamp_s(i);
+      const auto it = std::lower_bound(truth.begin(), truth.end(), t_s - settings.max_time_difference_s,
+                                       [](const dataset::GroundTruthPose& p, double t) { return p.timestamp_s < t; });
+      if (it == truth.end() || std::abs(it->timestamp_s - t_s) > settings.max_time_difference_s) {
+        throw std::invalid_argument("ghost voxels: no ground-truth pose for frame " +
+                                    sequence.files(i).rgb_path.stem().string() + " in " +
+                                    (folder / "groundtruth.txt").string());
+      }
+      used.emplace_back(i, settings.T_map_world * it->T_world_camera);
+    }
+  }
+  std::vector<VoxelIndex> person, still, fresh_person, fresh_still;
+  for (const auto& [frame_index, T_map_camera] : used) {
+    const dataset::TumFrame frame = sequence.load(frame_index);
     const fs::path mask_path = masks / (frame.rgb_stem + ".png");
     const cv::Mat labels = cv::imread(mask_path.string(), cv::IMREAD_UNCHANGED);
     if (labels.empty() || labels.type() != CV_16UC1 || labels.size() != frame.depth.size()) {
@@ -100,7 +129,6 @@ GhostVoxels ghost_voxels_from_sequence(const fs::path& folder, double resolution
                                   " is missing or not a 16-bit label image of the depth image's size");
     }
     const cv::Mat depth = frame.depth_metres();
-    const Eigen::Isometry3d T_map_camera = settings.T_map_world * it->T_world_camera;
     const Eigen::Matrix3f R = T_map_camera.linear().cast<float>();
     const Eigen::Vector3f t = T_map_camera.translation().cast<float>();
     for (int v = 0; v < depth.rows; v += settings.pixel_stride) {
@@ -120,9 +148,24 @@ GhostVoxels ghost_voxels_from_sequence(const fs::path& folder, double resolution
   }
   out.person_voxels = person.size();
   out.static_voxels = still.size();
-  std::set_difference(person.begin(), person.end(), still.begin(), still.end(), std::back_inserter(out.ghost),
-                      voxel_less);
+  out.ghost = ghost_set(std::move(person), std::move(still));
   return out;
+}
+
+std::vector<VoxelIndex> ghost_set(std::vector<VoxelIndex> person, std::vector<VoxelIndex> still) {
+  for (std::vector<VoxelIndex>* v : {&person, &still}) {
+    std::sort(v->begin(), v->end(), voxel_less);
+    v->erase(std::unique(v->begin(), v->end()), v->end());
+  }
+  std::vector<VoxelIndex> ghost;
+  std::set_difference(person.begin(), person.end(), still.begin(), still.end(), std::back_inserter(ghost), voxel_less);
+  return ghost;
+}
+
+std::size_t ghost_voxel_count(const OccupiedVoxels& map, const std::vector<VoxelIndex>& ghost) {
+  std::size_t n = 0;
+  for (const MapVoxel& m : map.voxels) n += std::binary_search(ghost.begin(), ghost.end(), m.index, voxel_less);
+  return n;
 }
 
 double ghost_fraction(const OccupiedVoxels& map, const GhostVoxels& ghosts) {

@@ -121,6 +121,8 @@ if(TARGET cge_pipeline)
     STDOUT "occupied_voxels 3" "entities 0" "integrity 0")
   cge_cli_test(eval_map_bt PROGRAM cge_eval EXIT 2 ARGS map eval/map3.bt STDERR "is not an OctoMap \\.ot file")
   cge_cli_test(eval_map_missing PROGRAM cge_eval EXIT 2 ARGS map eval/no_such_map.ot STDERR "is not a readable file")
+  cge_cli_test(eval_map_keyframes_without_sequence PROGRAM cge_eval EXIT 2 ARGS map eval/map3.ot --keyframes eval/gt.txt
+    STDERR "--keyframes needs --sequence")
 endif()
 
 # Threshold sweep and score gate of loops (eval/loops_curve.csv: the log of

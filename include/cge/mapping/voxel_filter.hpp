@@ -31,14 +31,36 @@ inline std::vector<SemanticPoint> voxel_filter(const std::vector<SemanticPoint>&
     keyed.emplace_back(voxel_of(points[i].position_m, voxel_m), i);
     packable = packable && (keyed.back().first.array().abs() < (1 << 20)).all();
   }
-  if (packable) {
-    const auto pack = [](const VoxelIndex& v) {
-      const auto field = [](int c) { return static_cast<std::uint64_t>(c + (1 << 20)); };
-      return (field(v.x()) << 42) | (field(v.y()) << 21) | field(v.z());
+  if (packable && !keyed.empty()) {
+    // Key relative to the cloud's voxel box, (x, y, z) lexicographic, sorted by a stable
+    // least-significant-digit radix sort: equal keys keep input order.
+    VoxelIndex lo = keyed[0].first, hi = keyed[0].first;
+    for (const auto& k : keyed) {
+      lo = lo.cwiseMin(k.first);
+      hi = hi.cwiseMax(k.first);
+    }
+    const VoxelIndex extent = hi - lo + VoxelIndex::Ones();  // each < 2^21: the product fits 63 bits
+    const auto pack = [&](const VoxelIndex& v) {
+      const VoxelIndex d = v - lo;
+      return (static_cast<std::uint64_t>(d.x()) * static_cast<std::uint64_t>(extent.y()) +
+              static_cast<std::uint64_t>(d.y())) *
+                 static_cast<std::uint64_t>(extent.z()) +
+             static_cast<std::uint64_t>(d.z());
     };
-    std::vector<std::pair<std::uint64_t, std::size_t>> packed(keyed.size());
+    const std::uint64_t largest = pack(hi);
+    std::vector<std::pair<std::uint64_t, std::size_t>> packed(keyed.size()), buffer(keyed.size());
     for (std::size_t i = 0; i < keyed.size(); ++i) packed[i] = {pack(keyed[i].first), i};
-    std::sort(packed.begin(), packed.end());
+    constexpr int kDigitBits = 11;
+    std::vector<std::size_t> count(std::size_t(1) << kDigitBits);
+    for (int shift = 0; shift < 64 && (largest >> shift) != 0; shift += kDigitBits) {
+      std::fill(count.begin(), count.end(), 0);
+      const std::uint64_t digit_mask = (std::uint64_t(1) << kDigitBits) - 1;
+      for (const auto& e : packed) ++count[(e.first >> shift) & digit_mask];
+      std::size_t sum = 0;
+      for (std::size_t& n : count) sum += std::exchange(n, sum);
+      for (const auto& e : packed) buffer[count[(e.first >> shift) & digit_mask]++] = e;
+      packed.swap(buffer);
+    }
     std::vector<std::pair<VoxelIndex, std::size_t>> sorted(keyed.size());
     for (std::size_t i = 0; i < packed.size(); ++i) sorted[i] = keyed[packed[i].second];
     keyed.swap(sorted);

@@ -7,7 +7,7 @@
 // rule (applied in one depth-first walk over the scan's cells in Morton order, see update_leaves):
 // voxels on the rays from the origin get a miss, the voxels of the points (within max range) a hit,
 // L(n | z_1:t+1) = L(n | z_1:t) + L(n | z_t+1), clamped; a cell is updated once per scan, hits win.
-// To save time, free space is carved by one ray per block of ray_block_voxels^3 end voxels.
+// Optionally (ray_block_voxels > 1) free space is carved by one ray per block of end voxels only.
 // Each end voxel also counts votes for the class labels of the points in it; the node's colour is
 // the preset colour of the label with the most votes over all scans so far (ties: the smaller
 // label), so the class can be read back from the colour (class_label_of_colour). Colours are set,
@@ -18,6 +18,7 @@
 // sorted vectors. Same scans, same bytes in .ot and .bt.
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <iterator>
@@ -47,9 +48,11 @@ struct SemanticOctreeSettings {
   double occupancy_threshold = 0.5;  ///< a voxel above this probability is occupied
   /// Free space: one ray per block of n x n x n end voxels (to the first end voxel of the block in
   /// key order) instead of one per end voxel. 1 = every end voxel (OctoMap's insertPointCloud with
-  /// discretize); 2 casts about 4 times fewer rays on surfaces, leaving some free voxels next to
-  /// surfaces unknown. Every end voxel still gets its hit. >= 1.
-  int ray_block_voxels = 2;
+  /// discretize); 2 casts about 4 times fewer rays on surfaces but leaves voxels next to surfaces
+  /// uncarved: on walking_xyz a person's lower body from a frame whose instance was missed or whose
+  /// feet were lost stayed occupied, no later ray crossing it (docs/MAPS.md). Every end voxel
+  /// still gets its hit. >= 1.
+  int ray_block_voxels = 1;
 };
 
 /// Throws std::invalid_argument naming the first setting out of range.
@@ -171,12 +174,31 @@ class SemanticOctree {
     ends.insert(ends.end(), far_ends.begin(), far_ends.end());
     std::vector<std::pair<std::uint64_t, std::uint64_t>> by_block(ends.size());  // (block, key): first key per block
     for (std::size_t i = 0; i < ends.size(); ++i) by_block[i] = {block_of(ends[i]), ends[i]};
-    std::sort(by_block.begin(), by_block.end());
+    // Blocks of one voxel: every end gets its ray (a repeat casts the same cells again), no sort needed.
+    if (settings_.ray_block_voxels > 1) std::sort(by_block.begin(), by_block.end());
+    // Rays share most cells near the camera: a bit per cell of the cube of keys around the origin
+    // that max range can reach drops repeats before the sort (cells outside it are kept and
+    // deduplicated by the sort).
     free_codes_.clear();
+    const SeenCube cube = seen_cube(origin);
     for (std::size_t i = 0; i < by_block.size(); ++i) {
       if (i > 0 && by_block[i].first == by_block[i - 1].first) continue;
       if (tree_->computeRayKeys(origin, tree_->keyToCoord(unpack(by_block[i].second)), ray_)) {
-        for (const octomap::OcTreeKey& k : ray_) free_codes_.push_back(morton(k));
+        for (const octomap::OcTreeKey& k : ray_) {
+          if (cube.side > 0) {
+            const std::int64_t a = static_cast<std::int64_t>(k[0]) - cube.first[0];
+            const std::int64_t b = static_cast<std::int64_t>(k[1]) - cube.first[1];
+            const std::int64_t c = static_cast<std::int64_t>(k[2]) - cube.first[2];
+            if (a >= 0 && b >= 0 && c >= 0 && a < cube.side && b < cube.side && c < cube.side) {
+              const std::uint64_t bit = static_cast<std::uint64_t>((a * cube.side + b) * cube.side + c);
+              std::uint64_t& word = seen_[bit >> 6];
+              const std::uint64_t mask = std::uint64_t(1) << (bit & 63u);
+              if (word & mask) continue;
+              word |= mask;
+            }
+          }
+          free_codes_.push_back(morton(k));
+        }
       }
     }
     sort_unique(free_codes_);
@@ -311,6 +333,37 @@ class SemanticOctree {
     return octomap::OcTreeKey(compact(m), compact(m >> 1), compact(m >> 2));
   }
 
+  /// The cube of keys within max range of an origin, as a bit set of side `side` starting at key
+  /// `first`; side 0 when the cube would exceed kMaxSeenBits (then the sort alone deduplicates).
+  struct SeenCube {
+    std::int64_t first[3] = {0, 0, 0};
+    std::int64_t side = 0;
+  };
+  static constexpr std::int64_t kMaxSeenBits = std::int64_t(1) << 27;  ///< 16 MiB of bits at most
+  SeenCube seen_cube(const octomap::point3d& origin) {
+    SeenCube cube;
+    octomap::OcTreeKey centre;
+    if (!tree_->coordToKeyChecked(origin, centre)) return cube;
+    const std::int64_t reach = static_cast<std::int64_t>(std::ceil(settings_.max_range_m / settings_.resolution_m)) + 2;
+    const std::int64_t side = 2 * reach + 1;
+    if (side > 1024 || side * side * side > kMaxSeenBits) return cube;
+    for (int k = 0; k < 3; ++k) cube.first[k] = static_cast<std::int64_t>(centre[k]) - reach;
+    cube.side = side;
+    seen_.assign(static_cast<std::size_t>((side * side * side + 63) / 64), 0);
+    return cube;
+  }
+
+  /// The index of the highest set bit of x != 0.
+  static int highest_bit(std::uint64_t x) {
+#if defined(__GNUC__) || defined(__clang__)
+    return 63 - __builtin_clzll(x);
+#else
+    int bit = 63;
+    while (!((x >> bit) & 1u)) --bit;
+    return bit;
+#endif
+  }
+
   /// Sorts 48-bit codes and removes repeats: a least-significant-digit radix sort (3 passes of 16 bits).
   void sort_unique(std::vector<std::uint64_t>& codes) {
     radix_buffer_.resize(codes.size());
@@ -348,10 +401,7 @@ class SemanticOctree {
       const std::uint64_t code = codes[i];
       int d = 0;  // the first depth whose child index differs from the previous code's
       if (i > first) {
-        const std::uint64_t diff = code ^ previous;
-        int top_bit = 3 * depth - 1;
-        while (!((diff >> top_bit) & 1u)) --top_bit;
-        d = depth - 1 - top_bit / 3;
+        d = depth - 1 - highest_bit(code ^ previous) / 3;
       }
       for (; d < depth; ++d) {
         octomap::ColorOcTreeNode* node = path[static_cast<std::size_t>(d)];
@@ -418,6 +468,7 @@ class SemanticOctree {
   // Buffers reused from scan to scan (their contents do not outlive insert_scan).
   octomap::KeyRay ray_;
   std::vector<std::uint64_t> free_codes_, hit_codes_, misses_, radix_buffer_;
+  std::vector<std::uint64_t> seen_;  ///< SeenCube bits of the current scan
   std::vector<Vote> hit_votes_, merged_;
 };
 
