@@ -36,9 +36,18 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
   }
   LocalBundleAdjustmentReport report;
   // The window: the new keyframe and its most covisible ones; keyframe 0 stays fixed (the gauge).
+  // The next most covisible keyframes are the fixed observers (LocalMappingSettings::fixed_keyframes).
   std::vector<int> window{keyframe_id};
-  for (const int id : map.covisible_keyframes(keyframe_id, lm.covisible_keyframes)) window.push_back(id);
+  std::vector<int> observers;
+  for (const int id : map.covisible_keyframes(keyframe_id, lm.covisible_keyframes + lm.fixed_keyframes)) {
+    (static_cast<int>(window.size()) <= lm.covisible_keyframes ? window : observers).push_back(id);
+  }
   std::sort(window.begin(), window.end());
+  std::sort(observers.begin(), observers.end());
+  const auto takes_part = [&](int k) {
+    return std::binary_search(window.begin(), window.end(), k) ||
+           std::binary_search(observers.begin(), observers.end(), k);
+  };
   // Points: those the window observes and at least two keyframes see (one view constrains nothing).
   std::vector<std::int64_t> point_ids;
   for (const int k : window) {
@@ -49,7 +58,7 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
   std::sort(point_ids.begin(), point_ids.end());
   point_ids.erase(std::unique(point_ids.begin(), point_ids.end()), point_ids.end());
   if (point_ids.empty()) return report;
-  // Poses: the window, then every other keyframe observing a point (fixed), each indexed once.
+  // Poses: the window, then the fixed observers that see a point, each indexed once.
   std::map<int, int> pose_index;
   std::vector<int> keyframe_of;
   std::vector<int> fixed;
@@ -71,6 +80,7 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
     const int index = static_cast<int>(points.size());
     points.push_back(p.position_world);
     for (const Observation& o : p.observations) {
+      if (!takes_part(o.keyframe_id)) continue;
       observations.push_back(keyframe_bundle_observation(map.keyframe(o.keyframe_id), o.keypoint_index,
                                                          index_of(o.keyframe_id), index, orb_scale_factor,
                                                          lm.depth_sigma_per_m));

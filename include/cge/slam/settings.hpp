@@ -140,12 +140,19 @@ struct MappingSettings {
 struct LocalMappingSettings {
   bool bundle_adjustment = true;  ///< false: keyframes and map points stay as tracking made them
   int covisible_keyframes = 10;   ///< window: the new keyframe and at most this many most covisible, count >= 0
+  /// Fixed observers: of the keyframes outside the window that see its points, only the next this
+  /// many most covisible with the new keyframe enter (held fixed); observations from the others are
+  /// left out. Without a cap, a policy that makes nearly every frame a keyframe (ORB-SLAM2-style, no
+  /// keyframe culling) puts hundreds of fixed poses into every window (seconds per keyframe).
+  /// Count >= 0 (0: the window alone, which then needs keyframe 0 in it for the gauge).
+  int fixed_keyframes = 10;
   /// Depth standard deviation: sigma_z = depth_sigma_per_m * z^2 (Kinect-like growth), 1/m, > 0.
   double depth_sigma_per_m = 0.003;
   /// Rounds, loss and iterations: a Huber round and a plain round on the chi2 inliers, as ORB-SLAM2.
   BundleAdjustmentSettings bundle = [] {
     BundleAdjustmentSettings b;
     b.solver.max_iterations = 10;  // per round; the window starts near its optimum
+    b.sparse_schur = false;        // at most 1 + covisible + fixed keyframes: dense Schur
     return b;
   }();
 };
@@ -215,6 +222,7 @@ struct SystemSettings {
     if (!(mapping.max_new_point_depth_m > 0)) fail("mapping.max_new_point_depth_m must be > 0");
     if (mapping.reference_min_observations < 1) fail("mapping.reference_min_observations must be at least 1");
     if (local_mapping.covisible_keyframes < 0) fail("local_mapping.covisible_keyframes must not be negative");
+    if (local_mapping.fixed_keyframes < 0) fail("local_mapping.fixed_keyframes must not be negative");
     if (!(local_mapping.depth_sigma_per_m > 0)) fail("local_mapping.depth_sigma_per_m must be > 0");
     local_mapping.bundle.validate();
     const LoopCorrectionSettings& lc = loop_correction;
