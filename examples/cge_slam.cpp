@@ -92,6 +92,9 @@ struct Options {
   int frames = 0;  // 0: all (dataset) or kDefaultPresetFrames (rendered)
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   std::string loop_correction = "pgo+ba";  // none | pgo | pgo+ba
+  // Depth term of the tracking refinement (0: pixels only) and local BA (on | off).
+  double tracking_depth_sigma = cge::slam::TrackerSettings{}.refinement_depth_sigma_per_m;
+  std::string local_ba = cge::slam::LocalMappingSettings{}.bundle_adjustment ? "on" : "off";
   std::string loop_scoring = cge::slam::to_string(cge::slam::LoopCloserSettings{}.scoring);
   double loop_min_score = 0;  // used only when --loop-min-score is given (loop_min_score_given)
   bool loop_min_score_given = false;
@@ -401,6 +404,8 @@ int run(Options opt) {
   settings.mapping.reference_min_observations = opt.reference_min_observations;
   settings.keep_keyframe_images = opt.map;
   settings.loop_correction.enabled = opt.loop_correction != "none";
+  settings.local_mapping.bundle_adjustment = opt.local_ba == "on";
+  settings.tracker.refinement_depth_sigma_per_m = opt.tracking_depth_sigma;
   settings.loop_correction.bundle_adjustment = opt.loop_correction == "pgo+ba";
   if (opt.frames < 0) throw UsageError("--frames must not be negative, got " + std::to_string(opt.frames));
   if (opt.out.empty()) throw UsageError("--out must name a folder");
@@ -616,6 +621,16 @@ int main(int argc, char** argv) {
                  "what an accepted loop triggers: none (detect and log only), pgo (pose graph), pgo+ba (and global "
                  "bundle adjustment)")
       ->check(CLI::IsMember({"none", "pgo", "pgo+ba"}));
+  app.add_option("--tracking-depth-sigma", opt.tracking_depth_sigma,
+                 "depth term of the tracking refinement: sigma_z = X * z^2 per matched keypoint with depth, 1/m; 0 = "
+                 "pixels only")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--local-ba", opt.local_ba,
+                 "local bundle adjustment of the new keyframe's covisible window after each keyframe insertion "
+                 "(timed as local_mapping)")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
   app.add_option("--loop-scoring", opt.loop_scoring,
                  "what ranks and gates loop candidates: cge (S_sum, the paper), bow_only (BoW score), combined "
                  "(S_sum x relative BoW score)")

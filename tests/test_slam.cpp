@@ -304,8 +304,8 @@ TEST_CASE("Output files: TUM lines and CSV headers", "[slam]") {
   std::ostringstream timings;
   cge::slam::write_timings_csv(timings, {});
   CHECK(timings.str() ==
-        "frame,timestamp,segmentation_ms,features_ms,dynamic_filter_ms,tracking_ms,keyframe_ms,loop_closing_ms,"
-        "optimisation_ms,total_ms\n");
+        "frame,timestamp,segmentation_ms,features_ms,dynamic_filter_ms,tracking_ms,keyframe_ms,local_mapping_ms,"
+        "loop_closing_ms,optimisation_ms,total_ms\n");
 }
 
 TEST_CASE("Settings: modes parse and bad values are refused", "[slam]") {

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "cge/opencv/keypoint.hpp"
+#include "cge/slam/local_mapping.hpp"
 #include "cge/slam/loop_closer.hpp"
 #include "cge/slam/moving_keypoints.hpp"
 
@@ -25,6 +26,8 @@ const char* to_string(Stage stage) {
       return "tracking";
     case Stage::keyframe:
       return "keyframe";
+    case Stage::local_mapping:
+      return "local_mapping";
     case Stage::loop_closing:
       return "loop_closing";
     case Stage::optimisation:
@@ -148,13 +151,15 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
 
   t = Clock::now();
   if (track.has_pose()) decide_keyframe(frame, track, index);
-  // Keyframe time excludes the loop closing and optimisation it triggered (timed on their own).
+  // Keyframe time excludes the local mapping, loop closing and optimisation it triggered (timed on
+  // their own).
   FrameRecord& r = records_[index];
   if (r.has_pose() && tracker_.reference_keyframe() >= 0) {
     r.reference_keyframe = tracker_.reference_keyframe();
     r.T_reference_camera = map_.keyframe(r.reference_keyframe).T_world_camera.inverse() * r.T_world_camera;
   }
-  time_of(r, Stage::keyframe) = elapsed_ms(t) - time_of(r, Stage::loop_closing) - time_of(r, Stage::optimisation);
+  time_of(r, Stage::keyframe) = elapsed_ms(t) - time_of(r, Stage::local_mapping) - time_of(r, Stage::loop_closing) -
+                                time_of(r, Stage::optimisation);
   time_of(r, Stage::total) = elapsed_ms(start) + segmentation_ms;
   return r;
 }
@@ -254,6 +259,11 @@ int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::s
 }
 
 void System::after_keyframe_inserted(int keyframe_id) {
+  if (settings_.local_mapping.bundle_adjustment) {
+    const auto start_local = Clock::now();
+    local_bundle_adjustment(map_, keyframe_id, intrinsics_, settings_.local_mapping, settings_.frame.orb.scale_factor);
+    time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_local);
+  }
   // Loop closing (ALGORITHMS.md section 7): the closer reads map_ (a KeyframeDatabaseView) and
   // its decision becomes a LoopRecord. The correction of an accepted loop (pose-graph
   // optimisation, then bundle adjustment, through map_.set_keyframe_pose / set_map_point_position)
@@ -330,19 +340,9 @@ void System::correct_loop(int query_keyframe) {
       points.push_back(p.position_world);
       point_ids.push_back(p.id);
       for (const Observation& o : p.observations) {
-        const Keyframe& kf = map_.keyframe(o.keyframe_id);
-        const cv::KeyPoint& kp = kf.keypoints[static_cast<std::size_t>(o.keypoint_index)];
-        BundleObservation b;
-        b.keyframe = o.keyframe_id;
-        b.point = index;
-        b.pixel_px = Eigen::Vector2d(kp.pt.x, kp.pt.y);
-        b.sigma_px = keypoint_sigma_px(kp, settings_.frame.orb.scale_factor);
-        const double z = kf.points_camera_m[static_cast<std::size_t>(o.keypoint_index)].z();
-        if (std::isfinite(z) && z > 0) {
-          b.depth_m = z;
-          b.sigma_depth_m = lc.depth_sigma_per_m * z * z;
-        }
-        observations.push_back(b);
+        observations.push_back(keyframe_bundle_observation(map_.keyframe(o.keyframe_id), o.keypoint_index,
+                                                           o.keyframe_id, index, settings_.frame.orb.scale_factor,
+                                                           lc.depth_sigma_per_m));
       }
     }
     if (!points.empty()) {

@@ -195,6 +195,12 @@ bool Tracker::ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
   return T_world_camera.matrix().allFinite();
 }
 
+void Tracker::add_depth(const Frame& frame, int keypoint, PoseObservation& o) const {
+  if (!(settings_.refinement_depth_sigma_per_m > 0) || !frame.has_depth(keypoint)) return;
+  o.depth_m = frame.points_camera_m[static_cast<std::size_t>(keypoint)].z();
+  o.sigma_depth_m = settings_.refinement_depth_sigma_per_m * o.depth_m * o.depth_m;
+}
+
 bool Tracker::refine_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches,
                           const Eigen::Isometry3d& T_initial, int min_inliers, Attempt& out) const {
   std::vector<PoseObservation> observations;
@@ -205,6 +211,7 @@ bool Tracker::refine_pose(const Frame& frame, const Map& map, const std::vector<
     o.point_world_m = map.map_point(matches[i]).position_world;
     o.pixel_px = Eigen::Vector2d(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
     o.sigma_px = keypoint_sigma_px(frame.keypoints[i], orb_scale_factor_);
+    add_depth(frame, static_cast<int>(i), o);
     observations.push_back(o);
     keypoint_of.push_back(static_cast<int>(i));
   }
@@ -314,6 +321,7 @@ bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::
     o.point_world_m = points_world[k];
     o.pixel_px = Eigen::Vector2d(kp.pt.x, kp.pt.y);
     o.sigma_px = keypoint_sigma_px(kp, orb_scale_factor_);
+    add_depth(frame, keypoints[k], o);
     observations.push_back(o);
   }
   PoseRefinementResult refined;

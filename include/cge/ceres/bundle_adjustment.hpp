@@ -87,6 +87,10 @@ struct BundleAdjustmentSettings {
   double min_depth_m = 1e-6;
   /// Ceres iterations and tolerances; sparse Schur (points eliminated) when Ceres has a sparse library.
   CeresSolverSettings solver{100, 1e-10, 1e-12, 1e-12};
+  /// Reduced camera system: sparse (global BA, hundreds of keyframes) or dense Schur (a local
+  /// window of a few dozen keyframes, whose reduced system of 6 unknowns per keyframe is small
+  /// enough that a dense factorisation beats the sparse set-up).
+  bool sparse_schur = true;
 
   /// Throws std::invalid_argument naming the bad field.
   void validate() const {
@@ -153,7 +157,7 @@ class BundleAdjuster {
       active[k] =
           (T_camera_world_start[observations[k].keyframe] * points[observations[k].point]).z() > settings.min_depth_m;
     std::vector<bool> used_pose(n_poses, false), used_point(n_points, false);
-    const ceres::Solver::Options options = settings.solver.options(/*sparse=*/true, /*schur=*/true);
+    const ceres::Solver::Options options = settings.solver.options(/*sparse=*/settings.sparse_schur, /*schur=*/true);
     for (int round = 0; round < settings.rounds; ++round) {
       // One loss shared by every residual; it outlives the problem, which does not own it.
       ceres::HuberLoss huber(settings.huber_delta > 0 ? settings.huber_delta : 1.0);  // any width when unused

@@ -8,7 +8,13 @@
 //     one can come back) is re-classified: outlier when chi2 > chi2_threshold or the point is not in
 //     front of the camera; outliers are left out of the next round;
 //   - the first `robust_rounds` rounds use a Huber loss of width huber_delta (in sigma units, i.e.
-//     huber_delta * sigma_px pixels), the later ones plain least squares on the inliers.
+//     huber_delta * sigma_px pixels), the later ones plain least squares on the inliers;
+//   - an observation with a measured depth (RGB-D: the frame's depth at the keypoint) adds the
+//     whitened depth residual (predicted z - measured z) / sigma_depth_m, making it a 3-dof chi2
+//     (threshold chi2_threshold_3dof). Pixels alone leave a weak mode, a rotation about the scene's
+//     centre with the matching sideways translation, that far points barely constrain; the depth
+//     of points off the optical axis changes along it (ORB-SLAM2's RGB-D pose optimisation has a
+//     depth term too).
 // Internally the pose is T_camera_world (see reprojection_cost.hpp); input and output are
 // T_world_camera, metres. Deterministic: one thread, fixed options (solver_settings.hpp).
 #include "cge/ceres/ceres_headers.hpp"
@@ -17,6 +23,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -33,6 +40,31 @@ struct PoseObservation {
   Eigen::Vector3d point_world_m = Eigen::Vector3d::Zero();  ///< the map point, world frame, metres
   Eigen::Vector2d pixel_px = Eigen::Vector2d::Zero();       ///< where it is observed, pixels
   double sigma_px = 1.0;  ///< standard deviation of the pixel position, pixels (> 0), e.g. 1.2^octave
+  /// Measured depth of the point along the optical axis, metres; NaN = none (pixel-only observation).
+  double depth_m = std::numeric_limits<double>::quiet_NaN();
+  double sigma_depth_m = 0.0;  ///< depth standard deviation, metres (> 0 when depth_m is given)
+};
+
+/// Whitened pixel and depth residuals of a world point through T_camera_world (3 residuals).
+struct PoseOnlyReprojectionDepthCost {
+  PoseOnlyReprojectionCost pixel;
+  double depth_m = 0;
+  double inv_sigma_depth = 1;  ///< 1 / sigma_depth_m
+
+  template <typename T>
+  bool operator()(const T* q_camera_world, const T* t_camera_world, T* residual) const {
+    if (!pixel(q_camera_world, t_camera_world, residual)) return false;
+    const Eigen::Map<const Eigen::Quaternion<T>> q(q_camera_world);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(t_camera_world);
+    const Eigen::Matrix<T, 3, 1> p = q * pixel.point_world_m.cast<T>() + t;
+    residual[2] = (p.z() - T(depth_m)) * T(inv_sigma_depth);
+    return true;
+  }
+
+  static ceres::CostFunction* create(const PoseOnlyReprojectionDepthCost& cost) {
+    return new ceres::AutoDiffCostFunction<PoseOnlyReprojectionDepthCost, 3, 4, 3>(
+        new PoseOnlyReprojectionDepthCost(cost));
+  }
 };
 
 struct PoseRefinementSettings {
@@ -44,6 +76,8 @@ struct PoseRefinementSettings {
   double huber_delta = 2.4477;
   /// An observation is an outlier when its chi2 (2 dof) exceeds this (95 %: 5.991), > 0.
   double chi2_threshold = 5.991;
+  /// The same for an observation with depth (pixel + depth, 3 dof; 95 %: 7.815), > 0.
+  double chi2_threshold_3dof = 7.815;
   /// Fewer valid observations than this: refine() throws (ORB-SLAM2: 3), >= 3.
   int min_observations = 3;
   /// Stop before a round that would have fewer inliers than this (ORB-SLAM2: 10), >= 3.
@@ -60,6 +94,8 @@ struct PoseRefinementSettings {
     if (robust_rounds < 0 || robust_rounds > rounds) fail("robust_rounds must be in [0, rounds]");
     if (!(std::isfinite(huber_delta) && huber_delta > 0)) fail("huber_delta must be finite and positive");
     if (!(std::isfinite(chi2_threshold) && chi2_threshold > 0)) fail("chi2_threshold must be finite and positive");
+    if (!(std::isfinite(chi2_threshold_3dof) && chi2_threshold_3dof > 0))
+      fail("chi2_threshold_3dof must be finite and positive");
     if (min_observations < 3) fail("min_observations must be at least 3");
     if (min_inliers_to_continue < 3) fail("min_inliers_to_continue must be at least 3");
     if (!(std::isfinite(min_depth_m) && min_depth_m >= 0)) fail("min_depth_m must be finite and not negative");
@@ -120,8 +156,10 @@ class PoseRefiner {
         if (!result.inliers[i]) continue;
         const PoseObservation& o = observations[i];
         PoseOnlyReprojectionCost cost{intrinsics, o.point_world_m, o.pixel_px, 1.0 / o.sigma_px, settings.min_depth_m};
-        problem.AddResidualBlock(PoseOnlyReprojectionCost::create(cost), robust ? &huber : nullptr, pose.q_xyzw.data(),
-                                 pose.t.data());
+        ceres::CostFunction* function =
+            std::isnan(o.depth_m) ? PoseOnlyReprojectionCost::create(cost)
+                                  : PoseOnlyReprojectionDepthCost::create({cost, o.depth_m, 1.0 / o.sigma_depth_m});
+        problem.AddResidualBlock(function, robust ? &huber : nullptr, pose.q_xyzw.data(), pose.t.data());
       }
       ceres::Solver::Summary summary;
       ceres::Solve(options, &problem, &summary);
@@ -165,6 +203,12 @@ class PoseRefiner {
       if (!o.pixel_px.allFinite()) throw std::invalid_argument(where + "pixel_px is not finite");
       if (!(std::isfinite(o.sigma_px) && o.sigma_px > 0))
         throw std::invalid_argument(where + "sigma_px must be finite and positive");
+      if (!std::isnan(o.depth_m)) {
+        if (!(std::isfinite(o.depth_m) && o.depth_m > 0))
+          throw std::invalid_argument(where + "depth_m must be positive and finite, or NaN for none");
+        if (!(std::isfinite(o.sigma_depth_m) && o.sigma_depth_m > 0))
+          throw std::invalid_argument(where + "sigma_depth_m must be finite and positive when depth_m is given");
+      }
     }
   }
 
@@ -176,9 +220,15 @@ class PoseRefiner {
     for (std::size_t i = 0; i < observations.size(); ++i) {
       const PoseObservation& o = observations[i];
       bool in_front = false;
-      const double chi2 =
+      double chi2 =
           reprojection_chi2(K, T_camera_world, o.point_world_m, o.pixel_px, o.sigma_px, settings.min_depth_m, in_front);
-      const bool inlier = in_front && (!use_chi2 || chi2 <= settings.chi2_threshold);
+      double threshold = settings.chi2_threshold;
+      if (!std::isnan(o.depth_m)) {
+        const double e = ((T_camera_world * o.point_world_m).z() - o.depth_m) / o.sigma_depth_m;
+        chi2 += e * e;
+        threshold = settings.chi2_threshold_3dof;
+      }
+      const bool inlier = in_front && (!use_chi2 || chi2 <= threshold);
       result.inliers[i] = inlier;
       result.inlier_count += inlier ? 1 : 0;
     }

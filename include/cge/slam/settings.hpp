@@ -2,6 +2,7 @@
 // Settings of the reference pipeline's tracking front (Frame, Tracker, System): every threshold with
 // its unit and default. Defaults marked "ORB-SLAM2" are that system's TUM RGB-D values; the rest
 // are ours, chosen on the synthetic walking sequences (docs in the pipeline's report).
+#include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -102,6 +103,11 @@ struct TrackerSettings {
   /// Motion-only refinement of the PnP pose (Ceres, Huber loss, chi2 outlier rounds; ORB-SLAM2's
   /// values). Each match's pixel sigma is scale_factor^octave of its keypoint.
   PoseRefinementSettings refinement;
+  /// Depth term of the refinement: each match whose keypoint has depth z also constrains the pose by
+  /// that depth with sigma_z = refinement_depth_sigma_per_m * z^2 (Kinect-like growth), 1/m; 0 = pixels
+  /// only. Pixels alone leave the rotation about the scene's centre (with the matching sideways
+  /// translation) weakly determined: that was most of the frame-to-frame jitter on the walking presets.
+  double refinement_depth_sigma_per_m = 0.003;
   /// The first frame initialises the map only with at least this many static keypoints with
   /// depth (ORB-SLAM2 RGB-D: 500); with fewer it is reported lost and the next frame tries.
   int min_initial_points = 100;
@@ -123,6 +129,32 @@ struct MappingSettings {
   /// contract states (cge/frontend/orbslam2_keyframe_policy.hpp); ORB-SLAM2's own nMinObs is 3,
   /// which on walking_xyz inserts a keyframe only at the 30-frame gap (docs/SLAM.md).
   int reference_min_observations = 1;
+};
+
+/// Local bundle adjustment after each keyframe insertion (ORB-SLAM2's local mapping): the new
+/// keyframe and its most covisible keyframes (the window) are optimised together with the map points
+/// they observe (points seen by at least two keyframes); every other keyframe observing those points
+/// contributes its observations with its pose fixed, and keyframe 0 is always fixed (the gauge).
+/// Pixel + depth observations, Huber then chi2 outlier removal (BundleAdjustmentSettings). Map points
+/// made from one keyframe's noisy depth are otherwise never refined.
+struct LocalMappingSettings {
+  bool bundle_adjustment = true;  ///< false: keyframes and map points stay as tracking made them
+  int covisible_keyframes = 10;   ///< window: the new keyframe and at most this many most covisible, count >= 0
+  /// Fixed observers: of the keyframes outside the window that see its points, only the next this
+  /// many most covisible with the new keyframe enter (held fixed); observations from the others are
+  /// left out. Without a cap, a policy that makes nearly every frame a keyframe (ORB-SLAM2-style, no
+  /// keyframe culling) puts hundreds of fixed poses into every window (seconds per keyframe).
+  /// Count >= 0 (0: the window alone, which then needs keyframe 0 in it for the gauge).
+  int fixed_keyframes = 10;
+  /// Depth standard deviation: sigma_z = depth_sigma_per_m * z^2 (Kinect-like growth), 1/m, > 0.
+  double depth_sigma_per_m = 0.003;
+  /// Rounds, loss and iterations: a Huber round and a plain round on the chi2 inliers, as ORB-SLAM2.
+  BundleAdjustmentSettings bundle = [] {
+    BundleAdjustmentSettings b;
+    b.solver.max_iterations = 10;  // per round; the window starts near its optimum
+    b.sparse_schur = false;        // at most 1 + covisible + fixed keyframes: dense Schur
+    return b;
+  }();
 };
 
 /// Correction of an accepted loop (ALGORITHMS.md section 7.5): a pose graph over all keyframes
@@ -151,6 +183,7 @@ struct SystemSettings {
   FrameSettings frame;
   TrackerSettings tracker;
   MappingSettings mapping;
+  LocalMappingSettings local_mapping;
   LoopCorrectionSettings loop_correction;
   PatchKeyframeSettings<double> patch_keyframes;        ///< mode YMK
   OrbSlam2KeyframeSettings<double> orbslam2_keyframes;  ///< modes none, Y, YM
@@ -180,12 +213,18 @@ struct SystemSettings {
     if (!(t.pnp_confidence > 0 && t.pnp_confidence < 1)) fail("tracker.pnp_confidence must be in (0, 1)");
     if (!(t.max_jump_m > 0)) fail("tracker.max_jump_m must be > 0");
     t.refinement.validate();
+    if (!(std::isfinite(t.refinement_depth_sigma_per_m) && t.refinement_depth_sigma_per_m >= 0))
+      fail("tracker.refinement_depth_sigma_per_m must be finite and not negative");
     if (t.min_initial_points < 4) fail("tracker.min_initial_points must be at least 4");
     if (t.relocalisation_keyframes < 0) fail("tracker.relocalisation_keyframes must not be negative");
     if (t.relocalisation_candidates < 0) fail("tracker.relocalisation_candidates must not be negative");
     if (t.min_relocalisation_inliers < 4) fail("tracker.min_relocalisation_inliers must be at least 4");
     if (!(mapping.max_new_point_depth_m > 0)) fail("mapping.max_new_point_depth_m must be > 0");
     if (mapping.reference_min_observations < 1) fail("mapping.reference_min_observations must be at least 1");
+    if (local_mapping.covisible_keyframes < 0) fail("local_mapping.covisible_keyframes must not be negative");
+    if (local_mapping.fixed_keyframes < 0) fail("local_mapping.fixed_keyframes must not be negative");
+    if (!(local_mapping.depth_sigma_per_m > 0)) fail("local_mapping.depth_sigma_per_m must be > 0");
+    local_mapping.bundle.validate();
     const LoopCorrectionSettings& lc = loop_correction;
     if (lc.min_keyframes_between < 0) fail("loop_correction.min_keyframes_between must not be negative");
     if (lc.covisibility_min_shared_points < 1)

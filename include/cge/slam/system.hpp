@@ -5,8 +5,9 @@
 //
 // Per frame (process): segmentation (modes Y, YM, YMK; skipped in mode none) -> features and depth
 // -> dynamic elimination -> tracking -> keyframe decision and insertion (new map points from
-// depth) -> after_keyframe_inserted(): the place of loop closing and optimisation (section 7),
-// which the loop closer plugs into. Call finish() after the last frame (the patch policy may still
+// depth) -> after_keyframe_inserted(): local bundle adjustment around the new keyframe
+// (settings.local_mapping, cge/slam/local_mapping.hpp), then loop closing and optimisation
+// (section 7), which the loop closer plugs into. Call finish() after the last frame (the patch policy may still
 // insert a pending keyframe).
 //
 // Deterministic: the same frames, instances and settings give the same records and map.
@@ -51,11 +52,12 @@ enum class Stage : int {
   dynamic_filter,
   tracking,
   keyframe,
+  local_mapping,
   loop_closing,
   optimisation,
   total
 };
-constexpr int kStageCount = 8;
+constexpr int kStageCount = 9;
 /// "segmentation", "features", ... "total".
 const char* to_string(Stage stage);
 

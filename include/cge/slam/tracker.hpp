@@ -100,6 +100,8 @@ class Tracker {
                           std::vector<std::int64_t>& matches) const;
   bool ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches, int min_inliers,
                    Eigen::Isometry3d& T_world_camera) const;
+  /// The keypoint's depth as a term of its refinement observation (refinement_depth_sigma_per_m).
+  void add_depth(const Frame& frame, int keypoint, PoseObservation& o) const;
   bool refine_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches,
                    const Eigen::Isometry3d& T_initial, int min_inliers, Attempt& out) const;
   bool refine_with_local_map(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,

@@ -1,0 +1,109 @@
+#include "cge/slam/local_mapping.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cge/slam/frame.hpp"
+
+namespace cge {
+namespace slam {
+
+BundleObservation keyframe_bundle_observation(const Keyframe& kf, int keypoint_index, int pose, int point,
+                                              double orb_scale_factor, double depth_sigma_per_m) {
+  const cv::KeyPoint& kp = kf.keypoints[static_cast<std::size_t>(keypoint_index)];
+  BundleObservation b;
+  b.keyframe = pose;
+  b.point = point;
+  b.pixel_px = Eigen::Vector2d(kp.pt.x, kp.pt.y);
+  b.sigma_px = keypoint_sigma_px(kp, orb_scale_factor);
+  const double z = kf.points_camera_m[static_cast<std::size_t>(keypoint_index)].z();
+  if (std::isfinite(z) && z > 0) {
+    b.depth_m = z;
+    b.sigma_depth_m = depth_sigma_per_m * z * z;
+  }
+  return b;
+}
+
+LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
+                                                    const PinholeIntrinsics<double>& intrinsics,
+                                                    const LocalMappingSettings& lm, double orb_scale_factor) {
+  if (keyframe_id < 0 || keyframe_id >= map.keyframe_count()) {
+    throw std::invalid_argument("local_bundle_adjustment: unknown keyframe " + std::to_string(keyframe_id));
+  }
+  LocalBundleAdjustmentReport report;
+  // The window: the new keyframe and its most covisible ones; keyframe 0 stays fixed (the gauge).
+  // The next most covisible keyframes are the fixed observers (LocalMappingSettings::fixed_keyframes).
+  std::vector<int> window{keyframe_id};
+  std::vector<int> observers;
+  for (const int id : map.covisible_keyframes(keyframe_id, lm.covisible_keyframes + lm.fixed_keyframes)) {
+    (static_cast<int>(window.size()) <= lm.covisible_keyframes ? window : observers).push_back(id);
+  }
+  std::sort(window.begin(), window.end());
+  std::sort(observers.begin(), observers.end());
+  const auto takes_part = [&](int k) {
+    return std::binary_search(window.begin(), window.end(), k) ||
+           std::binary_search(observers.begin(), observers.end(), k);
+  };
+  // Points: those the window observes and at least two keyframes see (one view constrains nothing).
+  std::vector<std::int64_t> point_ids;
+  for (const int k : window) {
+    for (const std::int64_t p : map.keyframe(k).map_point_ids) {
+      if (p >= 0 && map.map_point(p).observations.size() >= 2) point_ids.push_back(p);
+    }
+  }
+  std::sort(point_ids.begin(), point_ids.end());
+  point_ids.erase(std::unique(point_ids.begin(), point_ids.end()), point_ids.end());
+  if (point_ids.empty()) return report;
+  // Poses: the window, then the fixed observers that see a point, each indexed once.
+  std::map<int, int> pose_index;
+  std::vector<int> keyframe_of;
+  std::vector<int> fixed;
+  const auto index_of = [&](int k) {
+    const auto it = pose_index.find(k);
+    if (it != pose_index.end()) return it->second;
+    const int index = static_cast<int>(keyframe_of.size());
+    pose_index.emplace(k, index);
+    keyframe_of.push_back(k);
+    const bool in_window = std::binary_search(window.begin(), window.end(), k);
+    if (!in_window || k == 0) fixed.push_back(index);
+    return index;
+  };
+  for (const int k : window) index_of(k);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<BundleObservation> observations;
+  for (const std::int64_t id : point_ids) {
+    const MapPoint& p = map.map_point(id);
+    const int index = static_cast<int>(points.size());
+    points.push_back(p.position_world);
+    for (const Observation& o : p.observations) {
+      if (!takes_part(o.keyframe_id)) continue;
+      observations.push_back(keyframe_bundle_observation(map.keyframe(o.keyframe_id), o.keypoint_index,
+                                                         index_of(o.keyframe_id), index, orb_scale_factor,
+                                                         lm.depth_sigma_per_m));
+    }
+  }
+  if (fixed.empty()) return report;  // no gauge: a window without keyframe 0 and without outside observers
+  std::vector<Eigen::Isometry3d> poses;
+  for (const int k : keyframe_of) poses.push_back(map.keyframe(k).T_world_camera);
+  const BundleAdjustmentResult ba = BundleAdjuster{lm.bundle}.adjust(intrinsics, poses, points, observations, fixed);
+  for (std::size_t i = 0; i < keyframe_of.size(); ++i) {
+    if (std::find(fixed.begin(), fixed.end(), static_cast<int>(i)) == fixed.end()) {
+      map.set_keyframe_pose(keyframe_of[i], ba.T_world_camera[i]);
+    }
+  }
+  for (std::size_t j = 0; j < point_ids.size(); ++j) map.set_map_point_position(point_ids[j], ba.points_world_m[j]);
+  report.ran = true;
+  report.window_keyframes = static_cast<int>(window.size());
+  report.fixed_keyframes = static_cast<int>(fixed.size());
+  report.points = static_cast<int>(points.size());
+  report.observations = static_cast<int>(observations.size());
+  report.outliers = ba.outlier_count;
+  return report;
+}
+
+}  // namespace slam
+}  // namespace cge
