@@ -154,7 +154,8 @@ def walking_runs(runner: Runner, plan: Plan, jobs: int) -> dict:
         run["aligned"] = read_csv(aligned)
         if map_flags:
             run["map_eval"] = runner.run("cge_eval", "map", out / "map.ot", "--sequence", sequence, "--trajectory",
-                                         out / "trajectory.txt", "--json", capture_json=True, log=log)
+                                         out / "trajectory.txt", "--keyframes", out / "keyframes.txt", "--json",
+                                         capture_json=True, log=log)
         return run
 
     keys = [(preset, mode) for preset in WALKING_PRESETS for mode in MODES]
