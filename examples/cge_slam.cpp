@@ -96,6 +96,7 @@ struct Options {
   double loop_min_score = 0;  // used only when --loop-min-score is given (loop_min_score_given)
   bool loop_min_score_given = false;
   int loop_verified_members = cge::slam::LoopCloserSettings{}.verified_members;
+  double loop_min_group_ratio = cge::slam::LoopCloserSettings{}.min_group_total_ratio;
   std::string loop_verify_groups =
       cge::slam::LoopCloserSettings{}.verify_all_consistent_groups ? "consistent" : "best";  // best | consistent
   std::string cge_scaling;  // raw | normalised; empty: the LoopCloserSettings default
@@ -439,6 +440,7 @@ int run(Options opt) {
   }
   loop_settings.verified_members = opt.loop_verified_members;
   loop_settings.verify_all_consistent_groups = opt.loop_verify_groups == "consistent";
+  loop_settings.min_group_total_ratio = opt.loop_min_group_ratio;
   try {
     loop_settings.validate();
   } catch (const std::invalid_argument& e) {
@@ -451,7 +453,8 @@ int run(Options opt) {
       {"min_score_setting", bow_gate ? "min_bow_score" : "min_cge_score"},
       {"cge_scaling", loop_settings.exponent_scaling == cge::ScalingKind::raw ? "raw" : "normalised"},
       {"verified_members", loop_settings.verified_members},
-      {"verify_groups", opt.loop_verify_groups}};
+      {"verify_groups", opt.loop_verify_groups},
+      {"min_group_total_ratio", loop_settings.min_group_total_ratio}};
   std::unique_ptr<cge::bow::Vocabulary> vocabulary;
   if (!opt.vocabulary.empty()) {
     vocabulary = std::make_unique<cge::bow::Vocabulary>(cge::bow::Vocabulary::load_file(opt.vocabulary));
@@ -642,6 +645,10 @@ int main(int argc, char** argv) {
                  "which groups the geometric check verifies: best (the best-scored group only) or consistent (every "
                  "group passing the gate and the continuity check, as ORB-SLAM2)")
       ->check(CLI::IsMember({"best", "consistent"}))
+      ->capture_default_str();
+  app.add_option("--loop-min-group-ratio", opt.loop_min_group_ratio,
+                 "verify only groups whose score total reaches this fraction of the best group's (ORB-SLAM2: 0.75)")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   app.add_option("--cge-scaling", opt.cge_scaling,
                  std::string("exponent scaling of the degree-degree entropy in the loop closer: raw (the paper's) or "

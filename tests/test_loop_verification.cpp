@@ -92,10 +92,15 @@ TEST_CASE("choose_verification: the accepted check with the most inliers, else t
   CHECK(cge::slam::choose_verification({attempt(7, LoopReason::too_few_matches, 0)}) == 0);
 }
 
-TEST_CASE("LoopCloserSettings: verified_members must be at least 1", "[loops]") {
+TEST_CASE("LoopCloserSettings: verified_members and min_group_total_ratio are checked", "[loops]") {
   cge::slam::LoopCloserSettings s;
   s.verified_members = 0;
   CHECK_THAT(cge_test::invalid_argument_message([&] { s.validate(); }), Catch::Contains("verified_members"));
+  cge::slam::LoopCloserSettings r;
+  r.min_group_total_ratio = 1.5;
+  CHECK_THAT(cge_test::invalid_argument_message([&] { r.validate(); }), Catch::Contains("min_group_total_ratio"));
+  r.min_group_total_ratio = -0.1;
+  CHECK_THAT(cge_test::invalid_argument_message([&] { r.validate(); }), Catch::Contains("min_group_total_ratio"));
 }
 
 TEST_CASE("loops.csv reader: the extended format's columns", "[loops]") {

@@ -64,6 +64,7 @@ void LoopCloserSettings::validate() const {
   if (!std::isfinite(min_bow_score)) bad("min_bow_score must be finite");
   if (consistent_keyframes < 1) bad("consistent_keyframes must be at least 1");
   if (verified_members < 1) bad("verified_members must be at least 1");
+  if (!(min_group_total_ratio >= 0 && min_group_total_ratio <= 1)) bad("min_group_total_ratio must lie in [0, 1]");
   if (min_matched_points < 3) bad("min_matched_points must be at least 3 (PnP needs 4 points)");
   if (max_descriptor_distance < 0 || max_descriptor_distance > 256) bad("max_descriptor_distance must lie in 0 .. 256");
   if (!(descriptor_ratio > 0 && descriptor_ratio <= 1)) bad("descriptor_ratio must lie in (0, 1]");
@@ -438,6 +439,7 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
     const Scored& scored = groups[g];
     if (scored.consistency < settings_.consistent_keyframes) continue;
     if (!settings_.verify_all_consistent_groups && g != order.front()) continue;
+    if (scored.total < settings_.min_group_total_ratio * chosen.total) continue;
     int checked = 0;
     for (const auto& member : scored.scored_members) {
       if (checked == settings_.verified_members) break;

@@ -17,8 +17,9 @@
 //     is verifiable only when the groups of `consistent_keyframes` consecutive keyframes (K
 //     included) passed step 3 and chain (ORB-SLAM2's consistent groups). No verifiable group: the
 //     best group's reason (low_score or continuity).
-//  5. Geometry, for every verifiable group (ORB-SLAM2 verifies every consistent candidate), best
-//     total first, and within it its `verified_members` best members that pass the gate: static
+//  5. Geometry, for every verifiable group (ORB-SLAM2 verifies every consistent candidate) whose
+//     total is at least `min_group_total_ratio` of the best group's, best total first, and within
+//     it its `verified_members` best members that pass the gate: static
 //     features of K matched to static features with depth of the member by descriptor; more than
 //     `min_matched_points` matches (else too_few_matches); PnP RANSAC of the member's 3-D points
 //     (points_camera_m) to K's pixels; more than `min_matched_points` inliers (else
@@ -87,6 +88,10 @@ struct LoopCloserSettings {
   /// verifies every consistent candidate); false checks the best group alone (when it is
   /// verifiable).
   bool verify_all_consistent_groups = true;
+  /// Step 5: only groups whose step-3 total reaches this fraction of the best group's total are
+  /// verified (ORB-SLAM2 retains groups above 0.75 of the best accumulated score), in [0, 1]; bounds
+  /// the geometric checks, which otherwise cover most of the map when most keyframes share words.
+  double min_group_total_ratio = 0.75;
   /// Step 5: Num_th, the matches and PnP inliers needed are MORE than this (paper: 40).
   int min_matched_points = 40;
   /// Step 5: largest Hamming distance of a descriptor match, bits (ORB-SLAM2's TH_LOW: 50).
