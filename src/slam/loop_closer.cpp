@@ -434,7 +434,11 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
   consistent_groups_ = std::move(next);
 
   // Step 5: geometry of the verifiable groups' best members; the most inliers wins.
+  // Groups overlap (each holds a candidate's covisible keyframes), so one keyframe can be a member
+  // of many: it is checked once, and a repeat counts towards verified_members without a second
+  // check (the check is deterministic, and the earlier attempt wins ties in choose_verification).
   std::vector<LoopDecision> attempts;
+  std::vector<int> verified;
   for (std::size_t g : order) {
     const Scored& scored = groups[g];
     if (scored.consistency < settings_.consistent_keyframes) continue;
@@ -444,11 +448,13 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
     for (const auto& member : scored.scored_members) {
       if (checked == settings_.verified_members) break;
       if (!(gate_value(member.second) >= threshold)) continue;
+      ++checked;
+      if (std::find(verified.begin(), verified.end(), member.second) != verified.end()) continue;
+      verified.push_back(member.second);
       LoopDecision attempt;
       attempt.match_keyframe = member.second;
       geometric_check(current, map.keyframe(member.second), attempt);
       attempts.push_back(std::move(attempt));
-      ++checked;
     }
   }
   if (attempts.empty()) {
