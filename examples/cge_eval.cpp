@@ -14,6 +14,7 @@
 // bad input (the message names the file and line). Files named by --aligned-out and --curve are
 // never overwritten without --force; one that cannot be written is exit code 1.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -22,6 +23,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -275,6 +277,25 @@ Values run_map(const Options& opt, nlohmann::ordered_json& inputs) {
 }
 #endif
 
+// Missed loop queries by the loops.csv reason: the known reasons always (in the loop closer's step
+// order), any other word after them; "accepted" (a wrong match was accepted) as wrong_match.
+void add_missed_loop_queries(Values& v, const std::string& prefix, std::size_t missed,
+                             const std::map<std::string, std::size_t>& by_reason) {
+  v.push_back(count(prefix + "missed_loop_queries", missed));
+  const std::vector<std::string> known = {"no_candidates",   "low_score",       "continuity",
+                                          "too_few_matches", "pose_not_robust", "accepted"};
+  auto name = [&prefix](const std::string& reason) {
+    return prefix + "missed_" + (reason == "accepted" ? std::string("wrong_match") : reason);
+  };
+  for (const std::string& reason : known) {
+    const auto it = by_reason.find(reason);
+    v.push_back(count(name(reason), it == by_reason.end() ? 0 : it->second));
+  }
+  for (const auto& kv : by_reason) {
+    if (std::find(known.begin(), known.end(), kv.first) == known.end()) v.push_back(count(name(kv.first), kv.second));
+  }
+}
+
 Values run_loops(const Options& opt, nlohmann::ordered_json& inputs) {
   if (!(std::isfinite(opt.tolerance_s) && opt.tolerance_s >= 0)) {
     throw UsageError("--tolerance must be a finite number >= 0, got " + number(opt.tolerance_s));
@@ -323,17 +344,30 @@ Values run_loops(const Options& opt, nlohmann::ordered_json& inputs) {
             {"score", m::to_string(column)}};
   if (opt.min_score_given) inputs["min_score"] = opt.min_score;
   if (!opt.curve.empty()) inputs["curve"] = opt.curve;
-  return {count("ground_truth_pairs", e.ground_truth_pairs),
-          count("queried_keyframes", e.queried_keyframes),
-          count("detections", e.detections),
-          count("correct_detections", e.correct_detections),
-          real("precision", e.precision),
-          count("loop_queries", e.loop_queries),
-          count("detected_loop_queries", e.detected_loop_queries),
-          real("query_recall", e.query_recall),
-          count("loop_events", e.loop_events),
-          count("detected_loop_events", e.detected_loop_events),
-          real("event_recall", e.event_recall)};
+  Values v = {count("ground_truth_pairs", e.ground_truth_pairs),
+              count("queried_keyframes", e.queried_keyframes),
+              count("detections", e.detections),
+              count("correct_detections", e.correct_detections),
+              real("precision", e.precision),
+              count("loop_queries", e.loop_queries),
+              count("detected_loop_queries", e.detected_loop_queries),
+              real("query_recall", e.query_recall),
+              count("loop_events", e.loop_events),
+              count("detected_loop_events", e.detected_loop_events),
+              real("event_recall", e.event_recall)};
+  add_missed_loop_queries(v, "", e.loop_queries - e.detected_loop_queries, e.missed_by_reason);
+  if (e.has_connectivity) {
+    v.push_back(count("loop_queries_without_keyframe_partner", e.loop_queries_without_keyframe_partner));
+    v.push_back(count("connected_loop_queries", e.connected_loop_queries));
+    v.push_back(count("open_loop_queries", e.open_loop_queries));
+    v.push_back(count("detected_open_loop_queries", e.detected_open_loop_queries));
+    v.push_back(real("open_query_recall", e.open_query_recall));
+    add_missed_loop_queries(v, "open_", e.open_loop_queries - e.detected_open_loop_queries, e.missed_open_by_reason);
+  } else {
+    std::fprintf(stderr, "%s: note: %s has no connected_keyframes column: open query recall not computed\n", kProgram,
+                 opt.loops_csv.c_str());
+  }
+  return v;
 }
 
 int print(const std::string& command, const Values& values, const nlohmann::ordered_json& inputs, bool json) {

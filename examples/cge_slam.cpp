@@ -98,6 +98,10 @@ struct Options {
   std::string loop_scoring = cge::slam::to_string(cge::slam::LoopCloserSettings{}.scoring);
   double loop_min_score = 0;  // used only when --loop-min-score is given (loop_min_score_given)
   bool loop_min_score_given = false;
+  int loop_verified_members = cge::slam::LoopCloserSettings{}.verified_members;
+  double loop_min_group_ratio = cge::slam::LoopCloserSettings{}.min_group_total_ratio;
+  std::string loop_verify_groups =
+      cge::slam::LoopCloserSettings{}.verify_all_consistent_groups ? "consistent" : "best";  // best | consistent
   std::string cge_scaling;  // raw | normalised; empty: the LoopCloserSettings default
   bool map = false;         // write map.ply, map.ot, map.bt, map_top.png
   std::string out;
@@ -439,6 +443,9 @@ int run(Options opt) {
   } else if (!opt.cge_scaling.empty()) {
     throw UsageError("--cge-scaling: '" + opt.cge_scaling + "' is not raw or normalised");
   }
+  loop_settings.verified_members = opt.loop_verified_members;
+  loop_settings.verify_all_consistent_groups = opt.loop_verify_groups == "consistent";
+  loop_settings.min_group_total_ratio = opt.loop_min_group_ratio;
   try {
     loop_settings.validate();
   } catch (const std::invalid_argument& e) {
@@ -449,7 +456,10 @@ int run(Options opt) {
       {"scoring", cge::slam::to_string(loop_settings.scoring)},
       {"min_score", min_score},
       {"min_score_setting", bow_gate ? "min_bow_score" : "min_cge_score"},
-      {"cge_scaling", loop_settings.exponent_scaling == cge::ScalingKind::raw ? "raw" : "normalised"}};
+      {"cge_scaling", loop_settings.exponent_scaling == cge::ScalingKind::raw ? "raw" : "normalised"},
+      {"verified_members", loop_settings.verified_members},
+      {"verify_groups", opt.loop_verify_groups},
+      {"min_group_total_ratio", loop_settings.min_group_total_ratio}};
   std::unique_ptr<cge::bow::Vocabulary> vocabulary;
   if (!opt.vocabulary.empty()) {
     vocabulary = std::make_unique<cge::bow::Vocabulary>(cge::bow::Vocabulary::load_file(opt.vocabulary));
@@ -642,6 +652,19 @@ int main(int argc, char** argv) {
                      ") or BoW score (bow_only; default " +
                      short_number(cge::slam::LoopCloserSettings{}.min_bow_score) + ")")
       ->each([&opt](const std::string&) { opt.loop_min_score_given = true; });
+  app.add_option("--loop-verified-members", opt.loop_verified_members,
+                 "geometric check of each verifiable group's best this many members; the most PnP inliers wins")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--loop-verify-groups", opt.loop_verify_groups,
+                 "which groups the geometric check verifies: best (the best-scored group only) or consistent (every "
+                 "group passing the gate and the continuity check, as ORB-SLAM2)")
+      ->check(CLI::IsMember({"best", "consistent"}))
+      ->capture_default_str();
+  app.add_option("--loop-min-group-ratio", opt.loop_min_group_ratio,
+                 "verify only groups whose score total reaches this fraction of the best group's (ORB-SLAM2: 0.75)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   app.add_option("--cge-scaling", opt.cge_scaling,
                  std::string("exponent scaling of the degree-degree entropy in the loop closer: raw (the paper's) or "
                              "normalised (by the mean exponent); default ") +

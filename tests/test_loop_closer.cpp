@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -203,8 +204,10 @@ std::set<int> check_decisions(const LoopScene& s, const std::vector<LoopDecision
     // The geometric check's relative pose agrees with the ground truth.
     const Eigen::Isometry3d truth = s.keyframes[static_cast<std::size_t>(d.match_keyframe)].T_world_camera.inverse() *
                                     s.keyframes[static_cast<std::size_t>(d.query_keyframe)].T_world_camera;
-    CHECK((d.T_match_query.translation() - truth.translation()).norm() < 0.05);
-    CHECK(rotation_error_deg(d.T_match_query, truth) < 1.5);
+    // EPnP inside RANSAC without refinement: a few cm and degrees (since issue 5 more partners are
+    // verified, some farther from the query: 6.5 cm / 1.7 degrees measured on loop_structure_change).
+    CHECK((d.T_match_query.translation() - truth.translation()).norm() < 0.1);
+    CHECK(rotation_error_deg(d.T_match_query, truth) < 3.0);
     // Inlier pairs are static features, the match's with depth.
     for (const auto& p : d.inlier_pairs) {
       CHECK(s.keyframes[static_cast<std::size_t>(d.query_keyframe)].labels[static_cast<std::size_t>(p.first)] ==
@@ -393,4 +396,53 @@ TEST_CASE("train_vocabulary: from a sequence's first frames, deterministic", "[b
              Catch::Contains("first_frames"));
   CHECK_THAT(cge_test::invalid_argument_message([&] { cge::slam::train_vocabulary({cv::Mat()}, vs); }),
              Catch::Contains("image 0"));
+}
+
+TEST_CASE("LoopCloser: verifying more members and groups keeps the check with the most inliers", "[loop][loops]") {
+  // Checks with verified_members = 1 on the best group (the former step 5) are a subset of those
+  // with 3 members, which are a subset of those over every consistent group; the continuity state
+  // does not depend on step 5, so decision i of each run sees the same groups. The most-inliers
+  // choice can then only keep or gain acceptances and inliers.
+  const LoopScene& s = scene("loop_dynamic");
+  LoopCloserSettings one, members, all;
+  one.verified_members = 1;
+  one.verify_all_consistent_groups = false;
+  members.verify_all_consistent_groups = false;
+  REQUIRE(members.verified_members == 3);
+  REQUIRE(all.verify_all_consistent_groups);
+  const auto a = run(s, one);
+  const auto b = run(s, members);
+  const auto c = run(s, all);
+  REQUIRE(a.size() == c.size());
+  REQUIRE(b.size() == c.size());
+  int more_checks = 0;
+  cge_test::PoseCovisibilityView view(s.keyframes, 5, 60.0);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    INFO("keyframe " << i);
+    CHECK(a[i].verified_keyframes <= 1);
+    CHECK(b[i].verified_keyframes <= 3);
+    CHECK(b[i].verified_keyframes >= a[i].verified_keyframes);
+    CHECK(c[i].verified_keyframes >= b[i].verified_keyframes);
+    if (c[i].verified_keyframes > a[i].verified_keyframes) ++more_checks;
+    if (a[i].accepted) {
+      CHECK(b[i].accepted);
+      CHECK(b[i].matched_points >= a[i].matched_points);
+    }
+    if (b[i].accepted) {
+      CHECK(c[i].accepted);
+      CHECK(c[i].matched_points >= b[i].matched_points);
+    }
+    // Connected keyframes: the earlier keyframes covisible with the query, never the match.
+    view.set_count(static_cast<int>(i) + 1);
+    std::vector<int> expected;
+    for (int id : view.covisible_keyframes(static_cast<int>(i), -1)) {
+      if (id < static_cast<int>(i)) expected.push_back(id);
+    }
+    std::sort(expected.begin(), expected.end());
+    CHECK(c[i].connected_keyframes == expected);
+    CHECK(std::find(expected.begin(), expected.end(), c[i].match_keyframe) == expected.end());
+  }
+  CHECK(more_checks > 0);
+  // Every acceptance is still a ground-truth pair with a pose as ground truth.
+  check_decisions(s, c, all);
 }

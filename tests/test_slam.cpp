@@ -299,7 +299,15 @@ TEST_CASE("Output files: TUM lines and CSV headers", "[slam]") {
   cge::slam::write_loops_csv(loops, records);
   CHECK(loops.str() ==
         "query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,"
-        "reason\n2.000000,,3,,,,0,0,no_candidates\n");
+        "reason,tentative_matches,verified_keyframes,connected_keyframes\n2.000000,,3,,,,0,0,no_candidates,0,0,\n");
+  // The extended columns: checks run, tentative matches and the connected keyframes, space-separated.
+  std::ostringstream extended;
+  cge::slam::LoopRecord checked = rejected;
+  checked.tentative_matches = 12;
+  checked.verified_keyframes = 2;
+  checked.connected_keyframes = {0, 4, 7};
+  cge::slam::write_loops_csv(extended, {checked});
+  CHECK(extended.str().substr(extended.str().find('\n') + 1) == "2.000000,,3,,,,0,0,no_candidates,12,2,0 4 7\n");
 
   std::ostringstream timings;
   cge::slam::write_timings_csv(timings, {});

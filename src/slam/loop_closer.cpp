@@ -63,12 +63,34 @@ void LoopCloserSettings::validate() const {
   if (!std::isfinite(min_cge_score)) bad("min_cge_score must be finite");
   if (!std::isfinite(min_bow_score)) bad("min_bow_score must be finite");
   if (consistent_keyframes < 1) bad("consistent_keyframes must be at least 1");
+  if (verified_members < 1) bad("verified_members must be at least 1");
+  if (!(min_group_total_ratio >= 0 && min_group_total_ratio <= 1)) bad("min_group_total_ratio must lie in [0, 1]");
   if (min_matched_points < 3) bad("min_matched_points must be at least 3 (PnP needs 4 points)");
   if (max_descriptor_distance < 0 || max_descriptor_distance > 256) bad("max_descriptor_distance must lie in 0 .. 256");
   if (!(descriptor_ratio > 0 && descriptor_ratio <= 1)) bad("descriptor_ratio must lie in (0, 1]");
   if (!(pnp_reprojection_error_px > 0)) bad("pnp_reprojection_error_px must be positive");
   if (pnp_iterations < 1) bad("pnp_iterations must be at least 1");
   if (!(pnp_confidence > 0 && pnp_confidence < 1)) bad("pnp_confidence must lie in (0, 1)");
+}
+
+int choose_verification(const std::vector<LoopDecision>& attempts) {
+  // Accepted first, then checks that reached PnP, then the most matched points; earliest on ties.
+  auto stage = [](const LoopDecision& d) {
+    if (d.accepted) return 2;
+    return d.reason == LoopReason::pose_not_robust ? 1 : 0;
+  };
+  int best = -1;
+  for (std::size_t i = 0; i < attempts.size(); ++i) {
+    const int index = static_cast<int>(i);
+    if (best < 0) {
+      best = index;
+      continue;
+    }
+    const LoopDecision& a = attempts[i];
+    const LoopDecision& b = attempts[static_cast<std::size_t>(best)];
+    if (stage(a) > stage(b) || (stage(a) == stage(b) && a.matched_points > b.matched_points)) best = index;
+  }
+  return best;
 }
 
 std::vector<int> static_feature_rows(const Keyframe& kf) {
@@ -287,8 +309,11 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
     excluded[static_cast<std::size_t>(id)] = 1;
   }
   for (int id : map.covisible_keyframes(current.id, -1)) {
-    if (id >= 0 && id <= current.id) excluded[static_cast<std::size_t>(id)] = 1;
+    if (id < 0 || id >= current.id) continue;
+    excluded[static_cast<std::size_t>(id)] = 1;
+    decision.connected_keyframes.push_back(id);
   }
+  std::sort(decision.connected_keyframes.begin(), decision.connected_keyframes.end());
   std::vector<double> bow_score(static_cast<std::size_t>(current.id) + 1, 0.0);
   int best_common = 0;
   for (const BowQueryMatch& m : bow) {
@@ -350,9 +375,10 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
 
   struct Scored {
     Group group;
+    std::vector<std::pair<double, int>> scored_members;  // (step-3 score, id), best first
     double total = 0;
     int best = -1;
-    double best_score = -1;
+    int consistency = 0;  // step 4; 0 when the group's best member fails the gate
   };
   std::vector<Scored> groups;
   for (int c : candidates) {
@@ -367,28 +393,31 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
     for (int id : s.group.members) {
       const double v = member_score(id);
       s.total += v;
-      if (v > s.best_score || (v == s.best_score && id < s.best)) {
-        s.best_score = v;
-        s.best = id;
-      }
+      s.scored_members.emplace_back(v, id);
     }
+    // Best score first, the smaller id on ties.
+    std::sort(s.scored_members.begin(), s.scored_members.end(),
+              [](const std::pair<double, int>& a, const std::pair<double, int>& b) {
+                return a.first != b.first ? a.first > b.first : a.second < b.second;
+              });
+    s.best = s.scored_members.front().second;
     groups.push_back(std::move(s));
   }
-  std::size_t best_group = 0;
-  for (std::size_t g = 1; g < groups.size(); ++g) {
-    if (groups[g].total > groups[best_group].total) best_group = g;
-  }
-  const Scored& chosen = groups[best_group];
+  // Groups by descending total, the earlier candidate on ties: [0] is the best group.
+  std::vector<std::size_t> order(groups.size());
+  for (std::size_t g = 0; g < order.size(); ++g) order[g] = g;
+  std::stable_sort(order.begin(), order.end(),
+                   [&groups](std::size_t a, std::size_t b) { return groups[a].total > groups[b].total; });
+  const Scored& chosen = groups[order.front()];
   decision.match_keyframe = chosen.best;
   decision.bow_score = bow_score[static_cast<std::size_t>(chosen.best)];
   decision.cge_score = cge_of(chosen.best);
 
   // Step 4: continuity over the groups that passed the threshold.
   std::vector<Group> next;
-  int chosen_consistency = 0;
-  for (std::size_t g = 0; g < groups.size(); ++g) {
-    if (!(gate_value(groups[g].best) >= threshold)) continue;
-    Group grp = groups[g].group;
+  for (Scored& scored : groups) {
+    if (!(gate_value(scored.best) >= threshold)) continue;
+    Group grp = scored.group;
     int previous = 0;
     for (const Group& old : consistent_groups_) {
       for (int id : grp.members) {
@@ -399,21 +428,50 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
       }
     }
     grp.consistency = previous + 1;
-    if (g == best_group) chosen_consistency = grp.consistency;
+    scored.consistency = grp.consistency;
     next.push_back(std::move(grp));
   }
   consistent_groups_ = std::move(next);
-  if (!(gate_value(chosen.best) >= threshold)) {
-    decision.reason = LoopReason::low_score;
-    return finish();
-  }
-  if (chosen_consistency < settings_.consistent_keyframes) {
-    decision.reason = LoopReason::continuity;
-    return finish();
-  }
 
-  // Step 5: geometry.
-  geometric_check(current, map.keyframe(chosen.best), decision);
+  // Step 5: geometry of the verifiable groups' best members; the most inliers wins.
+  // Groups overlap (each holds a candidate's covisible keyframes), so one keyframe can be a member
+  // of many: it is checked once, and a repeat counts towards verified_members without a second
+  // check (the check is deterministic, and the earlier attempt wins ties in choose_verification).
+  std::vector<LoopDecision> attempts;
+  std::vector<int> verified;
+  for (std::size_t g : order) {
+    const Scored& scored = groups[g];
+    if (scored.consistency < settings_.consistent_keyframes) continue;
+    if (!settings_.verify_all_consistent_groups && g != order.front()) continue;
+    if (scored.total < settings_.min_group_total_ratio * chosen.total) continue;
+    int checked = 0;
+    for (const auto& member : scored.scored_members) {
+      if (checked == settings_.verified_members) break;
+      if (!(gate_value(member.second) >= threshold)) continue;
+      ++checked;
+      if (std::find(verified.begin(), verified.end(), member.second) != verified.end()) continue;
+      verified.push_back(member.second);
+      LoopDecision attempt;
+      attempt.match_keyframe = member.second;
+      geometric_check(current, map.keyframe(member.second), attempt);
+      attempts.push_back(std::move(attempt));
+    }
+  }
+  if (attempts.empty()) {
+    decision.reason = gate_value(chosen.best) >= threshold ? LoopReason::continuity : LoopReason::low_score;
+    return finish();
+  }
+  LoopDecision& kept = attempts[static_cast<std::size_t>(choose_verification(attempts))];
+  decision.match_keyframe = kept.match_keyframe;
+  decision.bow_score = bow_score[static_cast<std::size_t>(kept.match_keyframe)];
+  decision.cge_score = cge_of(kept.match_keyframe);
+  decision.matched_points = kept.matched_points;
+  decision.tentative_matches = kept.tentative_matches;
+  decision.accepted = kept.accepted;
+  decision.reason = kept.reason;
+  decision.T_match_query = kept.T_match_query;
+  decision.inlier_pairs = std::move(kept.inlier_pairs);
+  decision.verified_keyframes = static_cast<int>(attempts.size());
   return finish();
 }
 

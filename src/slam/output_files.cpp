@@ -39,13 +39,16 @@ void write_keyframes(std::ostream& out, const Map& map) {
 
 void write_loops_csv(std::ostream& out, const std::vector<LoopRecord>& loops) {
   out << "query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,"
-         "reason\n";
+         "reason,tentative_matches,verified_keyframes,connected_keyframes\n";
   for (const LoopRecord& l : loops) {
     const bool match = l.match_keyframe >= 0;
     out << format("%.6f", l.query_timestamp_s) << ',' << (match ? format("%.6f", l.match_timestamp_s) : "") << ','
         << l.query_keyframe << ',' << (match ? std::to_string(l.match_keyframe) : "") << ','
         << (match ? format("%.9g", l.bow_score) : "") << ',' << (match ? format("%.9g", l.cge_score) : "") << ','
-        << l.matched_points << ',' << (l.accepted ? 1 : 0) << ',' << l.reason << '\n';
+        << l.matched_points << ',' << (l.accepted ? 1 : 0) << ',' << l.reason << ',' << l.tentative_matches << ','
+        << l.verified_keyframes << ',';
+    for (std::size_t i = 0; i < l.connected_keyframes.size(); ++i) out << (i ? " " : "") << l.connected_keyframes[i];
+    out << '\n';
   }
 }
 

@@ -282,6 +282,9 @@ void System::after_keyframe_inserted(int keyframe_id) {
   r.matched_points = d.matched_points;
   r.accepted = d.accepted;
   r.reason = to_string(d.reason);
+  r.tentative_matches = d.tentative_matches;
+  r.verified_keyframes = d.verified_keyframes;
+  r.connected_keyframes = d.connected_keyframes;
   loops_.push_back(std::move(r));
   time_of(records_.back(), Stage::loop_closing) += elapsed_ms(start);
 

@@ -49,6 +49,17 @@ cge_cli_test(eval_loops PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops.cs
   STDOUT "ground_truth_pairs 7" "queried_keyframes 8" "detections 3" "correct_detections 1"
          "precision 0\\.333333333333333" "loop_queries 5" "detected_loop_queries 1" "query_recall 0\\.2"
          "loop_events 2" "detected_loop_events 1" "event_recall 0\\.5")
+# The same log with misses by reason; extended with keyframes at 1, 2 and 5 s and the connected
+# keyframes: 11 and 18 s have every keyframe partner connected, 10, 12 and 17 s are open.
+cge_cli_test(eval_loops_misses PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops.csv
+  STDOUT "missed_loop_queries 4" "missed_no_candidates 1" "missed_low_score 1" "missed_continuity 0"
+         "missed_too_few_matches 1" "missed_pose_not_robust 0" "missed_wrong_match 1"
+  STDERR "no connected_keyframes column")
+cge_cli_test(eval_loops_open PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops_extended.csv
+  STDOUT "query_recall 0\\.2" "event_recall 0\\.5" "loop_queries_without_keyframe_partner 0"
+         "connected_loop_queries 2" "open_loop_queries 3" "detected_open_loop_queries 1"
+         "open_query_recall 0\\.333333333333333" "open_missed_loop_queries 2" "open_missed_low_score 1"
+         "open_missed_too_few_matches 1" "open_missed_wrong_match 0")
 cge_cli_test(eval_loops_nan PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops_none_accepted.csv
   STDOUT "detections 0" "precision nan" "query_recall 0" STDERR "precision is undefined")
 cge_cli_test(eval_loops_json_null PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops_none_accepted.csv --json

@@ -10,6 +10,13 @@
 //   - accepted: 0 or 1; reason: one word of lower-case letters and '_' (accepted, no_candidates,
 //     low_score, continuity, too_few_matches, pose_not_robust); accepted is 1 exactly when the
 //     reason is "accepted", and an accepted row has a match.
+// Since issue 5 the header may go on with three more columns (the extended format; a file is read
+// in the format its header names, every row with that header's field count):
+//   ...,reason,tentative_matches,verified_keyframes,connected_keyframes
+//   - tentative_matches, verified_keyframes: non-negative whole numbers (descriptor matches before
+//     RANSAC of the reported check; geometric checks run);
+//   - connected_keyframes: the keyframe ids covisible with the query when it was processed (never
+//     candidates), ascending, separated by single spaces; empty for none.
 // Lines that are blank or start with '#' are skipped. A malformed line throws ParseError.
 
 #include <cmath>
@@ -37,17 +44,24 @@ struct LoopQuery {
   bool accepted = false;
   std::string reason;
   std::size_t line = 0;  ///< line in the file, for messages
+  // Extended format only (empty when the file has the 9 original columns):
+  std::optional<long long> tentative_matches;
+  std::optional<long long> verified_keyframes;
+  std::optional<std::vector<long long>> connected_keyframes;  ///< ascending keyframe ids
 };
 
 inline constexpr const char* kLoopQueriesHeader =
     "query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,"
     "reason";
+/// The extended header: kLoopQueriesHeader followed by these columns.
+inline constexpr const char* kLoopQueriesExtraColumns = ",tentative_matches,verified_keyframes,connected_keyframes";
 
 inline std::vector<LoopQuery> read_loop_queries(std::istream& in, const std::string& source) {
   std::vector<LoopQuery> rows;
   detail::LineReader reader(in, source);
   std::string line;
   bool header_seen = false;
+  std::size_t fields = 9;  // 12 in the extended format
   auto optional_number = [&reader](std::string_view field, const char* name) -> std::optional<double> {
     if (field.empty()) return std::nullopt;
     double v = 0.0;
@@ -70,13 +84,19 @@ inline std::vector<LoopQuery> read_loop_queries(std::istream& in, const std::str
     if (!header_seen) {
       std::string joined;
       for (std::size_t i = 0; i < f.size(); ++i) joined += (i ? "," : "") + std::string(f[i]);
-      if (joined != kLoopQueriesHeader) {
-        reader.fail("expected the header '" + std::string(kLoopQueriesHeader) + "'");
+      const std::string extended = std::string(kLoopQueriesHeader) + kLoopQueriesExtraColumns;
+      if (joined == extended) {
+        fields = 12;
+      } else if (joined != kLoopQueriesHeader) {
+        reader.fail("expected the header '" + std::string(kLoopQueriesHeader) + "' (optionally followed by '" +
+                    kLoopQueriesExtraColumns + "')");
       }
       header_seen = true;
       continue;
     }
-    if (f.size() != 9) reader.fail("expected 9 comma-separated fields, found " + std::to_string(f.size()));
+    if (f.size() != fields) {
+      reader.fail("expected " + std::to_string(fields) + " comma-separated fields, found " + std::to_string(f.size()));
+    }
     LoopQuery row;
     row.line = reader.line_number();
     const std::optional<double> query = optional_number(f[0], "query_timestamp");
@@ -107,6 +127,32 @@ inline std::vector<LoopQuery> read_loop_queries(std::istream& in, const std::str
     }
     if (row.match_timestamp_s.has_value() != row.match_keyframe.has_value()) {
       reader.fail("match_timestamp and match_keyframe must be both given or both empty");
+    }
+    if (fields == 12) {
+      row.tentative_matches = optional_count(f[9], "tentative_matches");
+      row.verified_keyframes = optional_count(f[10], "verified_keyframes");
+      if (!row.tentative_matches || !row.verified_keyframes) {
+        reader.fail("tentative_matches and verified_keyframes must not be empty");
+      }
+      std::vector<long long> ids;
+      std::string_view rest = f[11];
+      while (!rest.empty()) {
+        const std::size_t space = rest.find(' ');
+        const std::string_view id_text = rest.substr(0, space);
+        long long id = 0;
+        if (!detail::parse_count(id_text, id)) {
+          reader.fail("connected_keyframes " + detail::quoted(f[11]) +
+                      " is not a list of non-negative whole numbers separated by single spaces");
+        }
+        if (!ids.empty() && id <= ids.back()) {
+          reader.fail("connected_keyframes " + detail::quoted(f[11]) + " is not strictly ascending");
+        }
+        ids.push_back(id);
+        if (space == std::string_view::npos) break;
+        rest = rest.substr(space + 1);
+        if (rest.empty()) reader.fail("connected_keyframes " + detail::quoted(f[11]) + " ends with a space");
+      }
+      row.connected_keyframes = std::move(ids);
     }
     rows.push_back(row);
   }

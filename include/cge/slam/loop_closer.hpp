@@ -13,13 +13,18 @@
 //     (bow_only), or S_sum times the BoW score relative to the best candidate's (combined). Each
 //     group keeps its total and its best member; the best member of the best-total group is the
 //     match; it must reach the mode's threshold (else low_score).
-//  4. Continuity: a group is consistent with an earlier one when they share a keyframe; the match
-//     is kept only when the groups of `consistent_keyframes` consecutive keyframes (K included)
-//     passed step 3 and chain (ORB-SLAM2's consistent groups); else continuity.
-//  5. Geometry: static features of K matched to static features with depth of the match by
-//     descriptor; more than `min_matched_points` matches (else too_few_matches); PnP RANSAC of the
-//     match's 3-D points (points_camera_m) to K's pixels; more than `min_matched_points` inliers
-//     (else pose_not_robust); T_match_query is the result.
+//  4. Continuity: a group is consistent with an earlier one when they share a keyframe; a group
+//     is verifiable only when the groups of `consistent_keyframes` consecutive keyframes (K
+//     included) passed step 3 and chain (ORB-SLAM2's consistent groups). No verifiable group: the
+//     best group's reason (low_score or continuity).
+//  5. Geometry, for every verifiable group (ORB-SLAM2 verifies every consistent candidate) whose
+//     total is at least `min_group_total_ratio` of the best group's, best total first, and within
+//     it its `verified_members` best members that pass the gate: static
+//     features of K matched to static features with depth of the member by descriptor; more than
+//     `min_matched_points` matches (else too_few_matches); PnP RANSAC of the member's 3-D points
+//     (points_camera_m) to K's pixels; more than `min_matched_points` inliers (else
+//     pose_not_robust). The match is the verified member with the most inliers
+//     (choose_verification): the closest view of the place; T_match_query is its pose.
 
 #include <cstdint>
 #include <memory>
@@ -75,6 +80,18 @@ struct LoopCloserSettings {
   double min_bow_score = 0.05;
   /// Step 4: consecutive keyframes (the current one included) whose groups must chain; 1 disables.
   int consistent_keyframes = 3;
+  /// Step 5: members of each verifiable group checked geometrically, best step-3 scores first; the
+  /// one with the most PnP inliers is the match. The best-scored member is often a neighbouring,
+  /// overlapping view rather than the closest one (docs/LOOP_CLOSING.md); 1 checks only the best.
+  int verified_members = 3;
+  /// Step 5: verify every group that passed steps 3 and 4, not only the best-total one (ORB-SLAM2
+  /// verifies every consistent candidate); false checks the best group alone (when it is
+  /// verifiable).
+  bool verify_all_consistent_groups = true;
+  /// Step 5: only groups whose step-3 total reaches this fraction of the best group's total are
+  /// verified (ORB-SLAM2 retains groups above 0.75 of the best accumulated score), in [0, 1]; bounds
+  /// the geometric checks, which otherwise cover most of the map when most keyframes share words.
+  double min_group_total_ratio = 0.75;
   /// Step 5: Num_th, the matches and PnP inliers needed are MORE than this (paper: 40).
   int min_matched_points = 40;
   /// Step 5: largest Hamming distance of a descriptor match, bits (ORB-SLAM2's TH_LOW: 50).
@@ -117,6 +134,11 @@ struct LoopDecision {
   bool accepted = false;
   LoopReason reason = LoopReason::no_candidates;
   int candidates = 0;  ///< candidates after step 1
+  /// Geometric checks run in step 5 (0 when no group was verifiable).
+  int verified_keyframes = 0;
+  /// Keyframes covisible with the query when it was processed, ascending: already connected to it,
+  /// hence never candidates (a loop to them is closed already). For the evaluation (loops.csv).
+  std::vector<int> connected_keyframes;
   /// Pose of the query camera in the match camera's frame (valid when PnP succeeded).
   Eigen::Isometry3d T_match_query = Eigen::Isometry3d::Identity();
   /// PnP inliers: (query keypoint index, match keypoint index).
@@ -158,6 +180,7 @@ class LoopCloser {
 
   double cge_score(const Keyframe& current, const Keyframe& other);
   const CachedEntropies& own_entropies(const Keyframe& kf);
+  /// Step 5 for one member; fills the geometric fields of `decision` (reason, matches, pose, inliers).
   void geometric_check(const Keyframe& current, const Keyframe& match, LoopDecision& decision) const;
 
   std::unique_ptr<BowModel> model_;
@@ -169,6 +192,12 @@ class LoopCloser {
   std::vector<Group> consistent_groups_;
   int processed_ = 0;
 };
+
+/// The geometric check step 5 keeps among `attempts` (in verification order): the accepted one with
+/// the most PnP inliers (matched_points), the earliest on ties; when none was accepted, the one that
+/// came closest: pose_not_robust (PnP ran) before too_few_matches, then the most matched_points, the
+/// earliest on ties. -1 for no attempts.
+int choose_verification(const std::vector<LoopDecision>& attempts);
 
 /// Rows of the keyframe's static features (labels == static_feature), ascending.
 std::vector<int> static_feature_rows(const Keyframe& kf);

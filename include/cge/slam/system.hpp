@@ -98,6 +98,10 @@ struct LoopRecord {
   bool accepted = false;
   std::string reason =
       "no_candidates";  ///< accepted, no_candidates, low_score, continuity, too_few_matches, pose_not_robust
+
+  int tentative_matches = 0;             ///< LoopDecision::tentative_matches
+  int verified_keyframes = 0;            ///< LoopDecision::verified_keyframes
+  std::vector<int> connected_keyframes;  ///< LoopDecision::connected_keyframes
 };
 
 class LoopCloser;
