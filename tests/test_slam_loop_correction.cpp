@@ -123,6 +123,6 @@ TEST_CASE("System with a loop closer: an accepted loop is corrected and the keyf
   INFO("keyframe RMS error before " << error_before_m << " m, after " << error_after_m << " m, keyframes "
                                     << before.size());
   // Was 0.75 * before with the pixel-only tracker; its depth term (session 12) leaves less drift:
-  // 26.3 mm before, 20.4 mm after.
-  CHECK(error_after_m < error_before_m);
+  // 26.3 mm before, 20.4 mm after (0.78).
+  CHECK(error_after_m < 0.9 * error_before_m);
 }
