@@ -63,7 +63,7 @@ cge_cli_test(eval_loops_open PROGRAM cge_eval ARGS loops eval/loops.txt eval/loo
 cge_cli_test(eval_loops_nan PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops_none_accepted.csv
   STDOUT "detections 0" "precision nan" "query_recall 0" STDERR "precision is undefined")
 cge_cli_test(eval_loops_json_null PROGRAM cge_eval ARGS loops eval/loops.txt eval/loops_none_accepted.csv --json
-  STDOUT [[ *"precision": null,]] [[ *"event_recall": 0\.0]])
+  STDOUT [[ *"precision": null,]] [[ *"event_recall": 0\.0,]])
 cge_cli_test(eval_loops_tolerance PROGRAM cge_eval EXIT 2 ARGS loops eval/loops.txt eval/loops.csv --tolerance -1
   STDERR "--tolerance")
 
