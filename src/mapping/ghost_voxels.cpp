@@ -162,12 +162,6 @@ std::vector<VoxelIndex> ghost_set(std::vector<VoxelIndex> person, std::vector<Vo
   return ghost;
 }
 
-std::size_t ghost_voxel_count(const OccupiedVoxels& map, const std::vector<VoxelIndex>& ghost) {
-  std::size_t n = 0;
-  for (const MapVoxel& m : map.voxels) n += std::binary_search(ghost.begin(), ghost.end(), m.index, voxel_less);
-  return n;
-}
-
 double ghost_fraction(const OccupiedVoxels& map, const GhostVoxels& ghosts) {
   if (std::abs(map.resolution_m - ghosts.resolution_m) > 1e-9) {
     throw std::invalid_argument("ghost_fraction: map resolution " + std::to_string(map.resolution_m) +

@@ -25,6 +25,7 @@
 #include <Eigen/Geometry>
 
 #include "cge/mapping/map_voxel.hpp"
+#include "cge/mapping/semantic_integrity.hpp"
 #include "cge/mapping/semantic_point.hpp"
 #include "cge/metrics/trajectory.hpp"
 
@@ -62,9 +63,6 @@ GhostVoxels ghost_voxels_from_sequence(const std::filesystem::path& folder, doub
 /// P \ S: the voxels of `person` that are not in `still` (both in any order, repeats allowed);
 /// sorted by voxel_less, unique.
 std::vector<VoxelIndex> ghost_set(std::vector<VoxelIndex> person, std::vector<VoxelIndex> still);
-
-/// The number of occupied voxels of `map` whose index is in `ghost` (sorted by voxel_less, unique).
-std::size_t ghost_voxel_count(const OccupiedVoxels& map, const std::vector<VoxelIndex>& ghost);
 
 /// Occupied voxels of the map in the ghost set, over all occupied voxels (0 for an empty map).
 /// Throws std::invalid_argument when the resolutions differ by more than 1e-9 m.

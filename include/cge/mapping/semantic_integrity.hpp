@@ -113,16 +113,21 @@ inline std::vector<IntegrityEntity> component_entities(const OccupiedVoxels& map
   return out;
 }
 
-/// Fraction of the map's occupied voxels whose index is in `ghost_indices` (sorted by voxel_less,
-/// unique); 0 for an empty map.
-inline double ghost_fraction(const OccupiedVoxels& map, const std::vector<VoxelIndex>& ghost_indices) {
-  if (map.voxels.empty()) return 0;
+/// The number of occupied voxels of `map` whose index is in `ghost_indices` (sorted by voxel_less, unique).
+inline std::size_t ghost_voxel_count(const OccupiedVoxels& map, const std::vector<VoxelIndex>& ghost_indices) {
   std::size_t ghosts = 0;
   for (const MapVoxel& m : map.voxels) {
     ghosts += std::binary_search(ghost_indices.begin(), ghost_indices.end(), m.index,
                                  [](const VoxelIndex& a, const VoxelIndex& b) { return voxel_less(a, b); });
   }
-  return static_cast<double>(ghosts) / static_cast<double>(map.voxels.size());
+  return ghosts;
+}
+
+/// Fraction of the map's occupied voxels whose index is in `ghost_indices` (sorted by voxel_less,
+/// unique); 0 for an empty map.
+inline double ghost_fraction(const OccupiedVoxels& map, const std::vector<VoxelIndex>& ghost_indices) {
+  if (map.voxels.empty()) return 0;
+  return static_cast<double>(ghost_voxel_count(map, ghost_indices)) / static_cast<double>(map.voxels.size());
 }
 
 }  // namespace mapping
