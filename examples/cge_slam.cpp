@@ -95,6 +95,8 @@ struct Options {
   // Depth term of the tracking refinement (0: pixels only) and local BA (on | off).
   double tracking_depth_sigma = cge::slam::TrackerSettings{}.refinement_depth_sigma_per_m;
   std::string local_ba = cge::slam::LocalMappingSettings{}.bundle_adjustment ? "on" : "off";
+  int local_ba_window = cge::slam::LocalMappingSettings{}.covisible_keyframes;
+  int local_ba_fixed = cge::slam::LocalMappingSettings{}.fixed_keyframes;
   std::string loop_scoring = cge::slam::to_string(cge::slam::LoopCloserSettings{}.scoring);
   double loop_min_score = 0;  // used only when --loop-min-score is given (loop_min_score_given)
   bool loop_min_score_given = false;
@@ -409,6 +411,8 @@ int run(Options opt) {
   settings.keep_keyframe_images = opt.map;
   settings.loop_correction.enabled = opt.loop_correction != "none";
   settings.local_mapping.bundle_adjustment = opt.local_ba == "on";
+  settings.local_mapping.covisible_keyframes = opt.local_ba_window;
+  settings.local_mapping.fixed_keyframes = opt.local_ba_fixed;
   settings.tracker.refinement_depth_sigma_per_m = opt.tracking_depth_sigma;
   settings.loop_correction.bundle_adjustment = opt.loop_correction == "pgo+ba";
   if (opt.frames < 0) throw UsageError("--frames must not be negative, got " + std::to_string(opt.frames));
@@ -640,6 +644,14 @@ int main(int argc, char** argv) {
                  "local bundle adjustment of the new keyframe's covisible window after each keyframe insertion "
                  "(timed as local_mapping)")
       ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
+  app.add_option("--local-ba-window", opt.local_ba_window,
+                 "local BA window: the new keyframe and at most this many most covisible keyframes, optimised")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--local-ba-fixed", opt.local_ba_fixed,
+                 "local BA fixed observers: at most this many further covisible keyframes, held fixed (0: none)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--loop-scoring", opt.loop_scoring,
                  "what ranks and gates loop candidates: cge (S_sum, the paper), bow_only (BoW score), combined "

@@ -213,3 +213,60 @@ TEST_CASE("PoseRefiner depth term: recovers the pose, constrains the weak mode, 
     CHECK_THROWS_WITH(cge::PoseRefiner().refine(kIntrinsics, o, start), Catch::Contains("observation 3"));
   }
 }
+
+TEST_CASE("local_bundle_adjustment leaves out points without a depth observation", "[slam]") {
+  // A camera turning in place (walking_rpy): no baseline between the keyframes, so a point seen
+  // only in pixels is free along its ray. Points 0..9 have no depth in any keyframe.
+  std::mt19937 rng(13);
+  TruthMap t = make_map(4, 60, rng);
+  for (int k = 0; k < 4; ++k) {
+    Eigen::Isometry3d turned = Eigen::Isometry3d::Identity();
+    turned.linear() = Eigen::AngleAxisd(0.05 * k, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    t.true_poses[static_cast<std::size_t>(k)] = turned;
+  }
+  // Rebuild the observations for the turned cameras: exact pixels, depth only for points 10..59.
+  cge::slam::Map map;
+  for (int k = 0; k < 4; ++k) {
+    cge::slam::Keyframe kf;
+    kf.T_world_camera = k == 0 ? t.true_poses[0] : t.true_poses[static_cast<std::size_t>(k)] * random_motion(rng, 0.005, 0.01);
+    const Eigen::Isometry3d T_camera_world = t.true_poses[static_cast<std::size_t>(k)].inverse();
+    for (int j = 0; j < 60; ++j) {
+      const Eigen::Vector3d p = T_camera_world * t.true_points[static_cast<std::size_t>(j)];
+      const Eigen::Vector2d uv = kIntrinsics.project(p);
+      kf.keypoints.emplace_back(static_cast<float>(uv.x()), static_cast<float>(uv.y()), 31.f);
+      kf.keypoints.back().octave = 0;
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      kf.points_camera_m.push_back(j < 10 ? Eigen::Vector3d(nan, nan, nan) : p);
+      kf.labels.push_back(cge::FeatureLabel::static_feature);
+    }
+    kf.descriptors = cv::Mat::zeros(60, 32, CV_8UC1);
+    map.add_keyframe(kf);
+  }
+  std::vector<Eigen::Vector3d> before;
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int j = 0; j < 60; ++j) {
+    before.push_back(t.true_points[static_cast<std::size_t>(j)] + 0.02 * Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    const std::int64_t id = map.add_map_point(before.back(), cv::Mat::zeros(1, 32, CV_8UC1));
+    for (int k = 0; k < 4; ++k) map.add_observation(id, k, j);
+  }
+  const cge::slam::LocalBundleAdjustmentReport report =
+      cge::slam::local_bundle_adjustment(map, 3, kIntrinsics, cge::slam::LocalMappingSettings{}, 1.2);
+  REQUIRE(report.ran);
+  CHECK(report.points_without_depth == 10);
+  CHECK(report.points == 50);
+  CHECK(report.observations == 200);
+  CHECK(report.points_kept == 0);
+  for (int j = 0; j < 10; ++j) {
+    CAPTURE(j);
+    CHECK(map.map_point(j).position_world == before[static_cast<std::size_t>(j)]);  // untouched, bit for bit
+  }
+  for (int j = 10; j < 60; ++j) {
+    CAPTURE(j);
+    CHECK((map.map_point(j).position_world - t.true_points[static_cast<std::size_t>(j)]).norm() < 1e-4);
+  }
+  for (int k = 1; k < 4; ++k) {
+    CAPTURE(k);
+    CHECK(rotation_error_rad(map.keyframe(k).T_world_camera, t.true_poses[static_cast<std::size_t>(k)]) < 1e-5);
+    CHECK(translation_error_m(map.keyframe(k).T_world_camera, t.true_poses[static_cast<std::size_t>(k)]) < 1e-5);
+  }
+}

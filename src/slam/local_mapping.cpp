@@ -73,20 +73,39 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
     return index;
   };
   for (const int k : window) index_of(k);
+  // A point enters only with at least one depth observation among those taking part: pixels alone
+  // from keyframes with little baseline between them (a camera turning in place) do not fix the
+  // point along its ray, and it slides to kilometres (walking_rpy: points 300 m to 7 km out, which
+  // then pulled tracked poses 17 cm off). Its observation that had depth may belong to a keyframe
+  // left out of the problem.
+  std::vector<std::int64_t> optimised_ids;
   std::vector<Eigen::Vector3d> points;
   std::vector<BundleObservation> observations;
+  std::vector<BundleObservation> of_point;
   for (const std::int64_t id : point_ids) {
     const MapPoint& p = map.map_point(id);
-    const int index = static_cast<int>(points.size());
-    points.push_back(p.position_world);
+    of_point.clear();
     for (const Observation& o : p.observations) {
       if (!takes_part(o.keyframe_id)) continue;
-      observations.push_back(keyframe_bundle_observation(map.keyframe(o.keyframe_id), o.keypoint_index,
-                                                         index_of(o.keyframe_id), index, orb_scale_factor,
-                                                         lm.depth_sigma_per_m));
+      of_point.push_back(keyframe_bundle_observation(map.keyframe(o.keyframe_id), o.keypoint_index, -1,
+                                                     static_cast<int>(points.size()), orb_scale_factor,
+                                                     lm.depth_sigma_per_m));
+      of_point.back().keyframe = o.keyframe_id;  // a keyframe id until the point is known to enter
+    }
+    const bool anchored =
+        std::any_of(of_point.begin(), of_point.end(), [](const BundleObservation& b) { return !std::isnan(b.depth_m); });
+    if (!anchored) {
+      ++report.points_without_depth;
+      continue;
+    }
+    optimised_ids.push_back(id);
+    points.push_back(p.position_world);
+    for (BundleObservation& b : of_point) {
+      b.keyframe = index_of(b.keyframe);
+      observations.push_back(b);
     }
   }
-  if (fixed.empty()) return report;  // no gauge: a window without keyframe 0 and without outside observers
+  if (points.empty() || fixed.empty()) return report;  // no gauge: no keyframe 0, no outside observers
   std::vector<Eigen::Isometry3d> poses;
   for (const int k : keyframe_of) poses.push_back(map.keyframe(k).T_world_camera);
   const BundleAdjustmentResult ba = BundleAdjuster{lm.bundle}.adjust(intrinsics, poses, points, observations, fixed);
@@ -95,7 +114,20 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
       map.set_keyframe_pose(keyframe_of[i], ba.T_world_camera[i]);
     }
   }
-  for (std::size_t j = 0; j < point_ids.size(); ++j) map.set_map_point_position(point_ids[j], ba.points_world_m[j]);
+  // The same holds at the optimum: a point whose depth observations all ended as outliers was fixed
+  // by pixels alone in the last round, so it keeps its position.
+  std::vector<char> anchored_at_optimum(points.size(), 0);
+  for (std::size_t k = 0; k < observations.size(); ++k) {
+    if (!ba.outliers[k] && !std::isnan(observations[k].depth_m))
+      anchored_at_optimum[static_cast<std::size_t>(observations[k].point)] = 1;
+  }
+  for (std::size_t j = 0; j < optimised_ids.size(); ++j) {
+    if (anchored_at_optimum[j]) {
+      map.set_map_point_position(optimised_ids[j], ba.points_world_m[j]);
+    } else {
+      ++report.points_kept;
+    }
+  }
   report.ran = true;
   report.window_keyframes = static_cast<int>(window.size());
   report.fixed_keyframes = static_cast<int>(fixed.size());

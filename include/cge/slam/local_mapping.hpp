@@ -5,9 +5,10 @@
 // window's poses with them, is what keeps the map (and the frames tracked against it) consistent.
 //
 // The window: the new keyframe and its `covisible_keyframes` most covisible keyframes. The points:
-// those the window observes that at least two keyframes see. Every observation of those points takes
-// part; keyframes outside the window contribute with their poses fixed, and keyframe 0 is always
-// fixed (the world is its camera). Pixel + depth observations through cge::BundleAdjuster.
+// those the window observes that at least two keyframes see and that keep a depth observation in the
+// problem. Observations from the most covisible keyframes outside the window take part with their
+// poses fixed (at most fixed_keyframes of them), and keyframe 0 is always fixed (the world is its
+// camera). Pixel + depth observations through cge::BundleAdjuster.
 //
 // Deterministic: keyframes and points in id order, one-threaded Ceres.
 #include <cstdint>
@@ -27,6 +28,11 @@ struct LocalBundleAdjustmentReport {
   int window_keyframes = 0;  ///< keyframes in the window (keyframe 0 counted when in it)
   int fixed_keyframes = 0;   ///< keyframes held fixed (outside observers and keyframe 0)
   int points = 0;            ///< map points optimised
+  /// Points the window observes, left out: no observation taking part has depth (pixels alone do not
+  /// fix a point along its ray when the keyframes have little baseline).
+  int points_without_depth = 0;
+  /// Optimised points whose depth observations all ended as outliers: their positions are not written.
+  int points_kept = 0;
   int observations = 0;      ///< observations in the problem
   int outliers = 0;          ///< observations over the chi2 threshold at the optimum
 };
