@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -280,4 +281,61 @@ TEST_CASE("BundleAdjuster rejects invalid input with a message naming it", "[cer
   bad.chi2_threshold_3dof = 0;
   CHECK_THROWS_WITH(BundleAdjuster(bad).adjust(s.K, s.T_world_camera, s.points, s.observations),
                     Catch::Contains("chi2_threshold_3dof"));
+}
+
+TEST_CASE("RgbdReprojectionCost equals the autodiff residuals and Jacobians", "[ceres]") {
+  // Oracle: Ceres autodiff of ReprojectionCost (pixel only) and ReprojectionDepthCost (pixel + depth),
+  // on random poses (also quaternions off the unit sphere, which Ceres' manifold never produces but
+  // the ambient Jacobian must still match) and random points in front of the camera.
+  std::mt19937 rng(21);
+  const cge::PinholeIntrinsics<double> K{535.4, 539.2, 320.1, 247.6};
+  for (int trial = 0; trial < 200; ++trial) {
+    CAPTURE(trial);
+    Eigen::Quaterniond q = Eigen::Quaterniond::UnitRandom();
+    const double scale = trial % 4 == 0 ? uniform(rng, 0.9, 1.1) : 1.0;
+    double q_xyzw[4] = {scale * q.x(), scale * q.y(), scale * q.z(), scale * q.w()};
+    const Eigen::Vector3d t(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+    // A point 1..6 m in front of the (unit) camera, taken back to the world.
+    const Eigen::Vector3d p_camera(uniform(rng, -2, 2), uniform(rng, -1.5, 1.5), uniform(rng, 1, 6));
+    const Eigen::Vector3d X = q.conjugate() * (p_camera - t);
+    const Eigen::Vector2d pixel(uniform(rng, 0, 640), uniform(rng, 0, 480));
+    const double inv_sigma = 1.0 / uniform(rng, 0.5, 3.0);
+    const bool with_depth = trial % 2 == 0;
+    const double depth = uniform(rng, 1, 6), inv_sigma_depth = with_depth ? 1.0 / uniform(rng, 0.005, 0.1) : 0.0;
+
+    const cge::RgbdReprojectionCost analytic(K, pixel, inv_sigma, depth, inv_sigma_depth, 1e-6);
+    const cge::ReprojectionCost pixel_cost{K, pixel, inv_sigma, 1e-6};
+    std::unique_ptr<ceres::CostFunction> autodiff(
+        with_depth ? cge::ReprojectionDepthCost::create({pixel_cost, {depth, inv_sigma_depth}})
+                   : cge::ReprojectionCost::create(pixel_cost));
+    const int rows = with_depth ? 3 : 2;
+
+    double t_arr[3] = {t.x(), t.y(), t.z()}, X_arr[3] = {X.x(), X.y(), X.z()};
+    const double* params[3] = {q_xyzw, t_arr, X_arr};
+    double r_a[3], J_a0[12], J_a1[9], J_a2[9];
+    double r_b[3] = {0, 0, 0}, J_b0[12] = {}, J_b1[9] = {}, J_b2[9] = {};
+    double* J_a[3] = {J_a0, J_a1, J_a2};
+    double* J_b[3] = {J_b0, J_b1, J_b2};
+    REQUIRE(analytic.Evaluate(params, r_a, J_a));
+    REQUIRE(autodiff->Evaluate(params, r_b, J_b));
+    const auto close = [](double a, double b) { return std::abs(a - b) <= 1e-9 * (1.0 + std::abs(b)); };
+    for (int r = 0; r < rows; ++r) {
+      CAPTURE(r);
+      CHECK(close(r_a[r], r_b[r]));
+      for (int c = 0; c < 4; ++c) CHECK(close(J_a0[r * 4 + c], J_b0[r * 4 + c]));
+      for (int c = 0; c < 3; ++c) CHECK(close(J_a1[r * 3 + c], J_b1[r * 3 + c]));
+      for (int c = 0; c < 3; ++c) CHECK(close(J_a2[r * 3 + c], J_b2[r * 3 + c]));
+    }
+    if (!with_depth) {  // the pixel-only depth row is identically zero
+      CHECK(r_a[2] == 0.0);
+      for (int c = 0; c < 4; ++c) CHECK(J_a0[8 + c] == 0.0);
+      for (int c = 0; c < 3; ++c) CHECK((J_a1[6 + c] == 0.0 && J_a2[6 + c] == 0.0));
+    }
+  }
+  // Behind the camera: no residual, as the autodiff cost.
+  const cge::RgbdReprojectionCost analytic(K, Eigen::Vector2d(320, 240), 1.0, 2.0, 10.0, 1e-6);
+  double q_id[4] = {0, 0, 0, 1}, t0[3] = {0, 0, 0}, behind[3] = {0, 0, -1};
+  const double* params[3] = {q_id, t0, behind};
+  double r[3];
+  CHECK_FALSE(analytic.Evaluate(params, r, nullptr));
 }

@@ -18,11 +18,13 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "cge/ceres/reprojection_cost.hpp"
+#include "cge/ceres/rgbd_reprojection_cost.hpp"
 #include "cge/ceres/se3_parametrisation.hpp"
 #include "cge/ceres/solver_settings.hpp"
 #include "cge/core/pinhole_intrinsics.hpp"
@@ -38,6 +40,9 @@ struct BundleObservation {
   double depth_m = std::numeric_limits<double>::quiet_NaN();
   double sigma_depth_m = 0.0;  ///< depth standard deviation, metres (> 0 when depth_m is given)
 };
+
+// The autodiff pair below is the reference that RgbdReprojectionCost (used by BundleAdjuster) is
+// tested against.
 
 /// Whitened depth residual (predicted - measured) / sigma of a world point through T_camera_world.
 struct DepthCost {
@@ -157,12 +162,13 @@ class BundleAdjuster {
       active[k] =
           (T_camera_world_start[observations[k].keyframe] * points[observations[k].point]).z() > settings.min_depth_m;
     std::vector<bool> used_pose(n_poses, false), used_point(n_points, false);
-    const ceres::Solver::Options options = settings.solver.options(/*sparse=*/settings.sparse_schur, /*schur=*/true);
     for (int round = 0; round < settings.rounds; ++round) {
       // One loss shared by every residual; it outlives the problem, which does not own it.
       ceres::HuberLoss huber(settings.huber_delta > 0 ? settings.huber_delta : 1.0);  // any width when unused
       ceres::Problem problem(problem_options());
-      std::vector<bool> in_problem(n_poses, false);
+      // Elimination order given, not searched for: points first (Schur complement), then poses.
+      auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+      std::vector<bool> in_problem(n_poses, false), point_in_problem(n_points, false);
       const bool robust = round < settings.robust_rounds && settings.huber_delta > 0;
       for (std::size_t k = 0; k < observations.size(); ++k) {
         if (!active[k]) continue;
@@ -170,17 +176,24 @@ class BundleAdjuster {
         SE3Block& pose = poses[o.keyframe];
         if (!in_problem[o.keyframe]) {
           pose.add_to(problem, fixed[o.keyframe]);
+          ordering->AddElementToGroup(pose.q_xyzw.data(), 1);
+          ordering->AddElementToGroup(pose.t.data(), 1);
           in_problem[o.keyframe] = true;
           used_pose[o.keyframe] = true;
         }
+        if (!point_in_problem[o.point]) {
+          ordering->AddElementToGroup(points[o.point].data(), 0);
+          point_in_problem[o.point] = true;
+        }
         used_point[o.point] = true;
-        ReprojectionCost pixel{intrinsics, o.pixel_px, 1.0 / o.sigma_px, settings.min_depth_m};
-        ceres::CostFunction* cost = std::isnan(o.depth_m)
-                                        ? ReprojectionCost::create(pixel)
-                                        : ReprojectionDepthCost::create({pixel, {o.depth_m, 1.0 / o.sigma_depth_m}});
-        problem.AddResidualBlock(cost, robust ? &huber : nullptr, pose.q_xyzw.data(), pose.t.data(),
-                                 points[o.point].data());
+        const bool has_depth = !std::isnan(o.depth_m);
+        problem.AddResidualBlock(new RgbdReprojectionCost(intrinsics, o.pixel_px, 1.0 / o.sigma_px,
+                                                          has_depth ? o.depth_m : 0.0,
+                                                          has_depth ? 1.0 / o.sigma_depth_m : 0.0, settings.min_depth_m),
+                                 robust ? &huber : nullptr, pose.q_xyzw.data(), pose.t.data(), points[o.point].data());
       }
+      ceres::Solver::Options options = settings.solver.options(/*sparse=*/settings.sparse_schur, /*schur=*/true);
+      options.linear_solver_ordering = ordering;
       if (problem.NumResidualBlocks() == 0) {
         if (round == 0) result.converged = true;  // nothing to optimise
         break;

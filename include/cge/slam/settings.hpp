@@ -152,6 +152,9 @@ struct LocalMappingSettings {
   BundleAdjustmentSettings bundle = [] {
     BundleAdjustmentSettings b;
     b.solver.max_iterations = 10;  // per round; the window starts near its optimum
+    // A relative cost change of 1e-6 is converged enough for a window the next keyframe adjusts
+    // again (1e-10: 8 iterations instead of 3 on a 13 000-observation window, same cost to 1e-8).
+    b.solver.function_tolerance = 1e-6;
     b.sparse_schur = false;        // at most 1 + covisible + fixed keyframes: dense Schur
     return b;
   }();
