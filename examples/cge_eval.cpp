@@ -230,6 +230,7 @@ Values run_rpe(const Options& opt, nlohmann::ordered_json& inputs) {
 Values run_map(const Options& opt, nlohmann::ordered_json& inputs) {
   namespace mp = cge::mapping;
   if (!opt.map_keyframes.empty() && opt.map_sequence.empty()) throw UsageError("map: --keyframes needs --sequence");
+  if (!opt.map_trajectory.empty() && opt.map_sequence.empty()) throw UsageError("map: --trajectory needs --sequence");
   const auto tree = cge::octomap_adapter::read_color_octree(opt.map_ot);
   inputs["map"] = opt.map_ot;
   const mp::OccupiedVoxels voxels = cge::octomap_adapter::occupied_voxels(*tree);

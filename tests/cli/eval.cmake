@@ -134,6 +134,8 @@ if(TARGET cge_pipeline)
   cge_cli_test(eval_map_missing PROGRAM cge_eval EXIT 2 ARGS map eval/no_such_map.ot STDERR "is not a readable file")
   cge_cli_test(eval_map_keyframes_without_sequence PROGRAM cge_eval EXIT 2 ARGS map eval/map3.ot --keyframes eval/gt.txt
     STDERR "--keyframes needs --sequence")
+  cge_cli_test(eval_map_trajectory_without_sequence PROGRAM cge_eval EXIT 2 ARGS map eval/map3.ot --trajectory eval/gt.txt
+    STDERR "--trajectory needs --sequence")
 endif()
 
 # Threshold sweep and score gate of loops (eval/loops_curve.csv: the log of
