@@ -18,6 +18,7 @@
 #include "cge/metrics/loop_precision_recall.hpp"
 #include "cge/metrics/loop_queries_io.hpp"
 #include "cge/slam/loop_closer.hpp"
+#include "loop_queries_text.hpp"
 #include "test_support.hpp"
 
 using cge::slam::LoopDecision;
@@ -61,14 +62,8 @@ const std::string kExtendedHeader =
     "query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,"
     "reason,tentative_matches,verified_keyframes,connected_keyframes\n";
 
-std::vector<LoopQuery> read_csv_text(const std::string& text) {
-  std::istringstream in(text);
-  return read_loop_queries(in, "loops.csv");
-}
-
-std::string csv_error(const std::string& text) {
-  return cge_test::invalid_argument_message([&] { read_csv_text(text); });
-}
+using cge_test::read_loops_csv_text;
+using cge_test::loops_csv_error;
 
 }  // namespace
 
@@ -104,7 +99,7 @@ TEST_CASE("LoopCloserSettings: verified_members and min_group_total_ratio are ch
 }
 
 TEST_CASE("loops.csv reader: the extended format's columns", "[loops]") {
-  const std::vector<LoopQuery> rows = read_csv_text(kExtendedHeader +
+  const std::vector<LoopQuery> rows = read_loops_csv_text(kExtendedHeader +
                                                     "1.000000,,3,,,,0,0,no_candidates,0,0,\n"
                                                     "2.000000,0.500000,4,1,0.5,0.9,12,0,too_few_matches,12,3,0 2 3\n"
                                                     "3.000000,0.600000,5,2,0.6,0.9,88,1,accepted,120,1,4\n");
@@ -117,24 +112,24 @@ TEST_CASE("loops.csv reader: the extended format's columns", "[loops]") {
   CHECK(*rows[1].connected_keyframes == std::vector<long long>{0, 2, 3});
   CHECK(*rows[2].connected_keyframes == std::vector<long long>{4});
   // The original format leaves the new fields empty.
-  const std::vector<LoopQuery> old = read_csv_text(
+  const std::vector<LoopQuery> old = read_loops_csv_text(
       "query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,"
       "reason\n1.000000,,3,,,,0,0,no_candidates\n");
   REQUIRE(old.size() == 1);
   CHECK_FALSE(old[0].tentative_matches.has_value());
   CHECK_FALSE(old[0].connected_keyframes.has_value());
 
-  CHECK_THAT(csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates\n"),
+  CHECK_THAT(loops_csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates\n"),
              Catch::Contains("loops.csv:2: expected 12 comma-separated fields, found 9"));
-  CHECK_THAT(csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates,,0,\n"),
+  CHECK_THAT(loops_csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates,,0,\n"),
              Catch::Contains("loops.csv:2: tentative_matches and verified_keyframes must not be empty"));
-  CHECK_THAT(csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates,0,0,1 x\n"),
+  CHECK_THAT(loops_csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates,0,0,1 x\n"),
              Catch::Contains("loops.csv:2: connected_keyframes '1 x' is not a list"));
-  CHECK_THAT(csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates,0,0,1  2\n"),
+  CHECK_THAT(loops_csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates,0,0,1  2\n"),
              Catch::Contains("loops.csv:2: connected_keyframes '1  2' is not a list"));
-  CHECK_THAT(csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates,0,0,2 1\n"),
+  CHECK_THAT(loops_csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates,0,0,2 1\n"),
              Catch::Contains("loops.csv:2: connected_keyframes '2 1' is not strictly ascending"));
-  CHECK_THAT(csv_error("query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_"
+  CHECK_THAT(loops_csv_error("query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_"
                        "points,accepted,reason,tentative_matches\n"),
              Catch::Contains("loops.csv:1: expected the header"));
 }

@@ -13,6 +13,7 @@
 #include "cge/metrics/ground_truth_loops_io.hpp"
 #include "cge/metrics/loop_queries_io.hpp"
 #include "cge/metrics/tum_trajectory_io.hpp"
+#include "loop_queries_text.hpp"
 #include "test_support.hpp"
 
 using namespace cge::metrics;
@@ -41,14 +42,8 @@ const std::string kHeader =
     "query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,"
     "reason\n";
 
-std::vector<LoopQuery> read_csv_text(const std::string& text) {
-  std::istringstream in(text);
-  return read_loop_queries(in, "loops.csv");
-}
-
-std::string csv_error(const std::string& text) {
-  return cge_test::invalid_argument_message([&] { read_csv_text(text); });
-}
+using cge_test::read_loops_csv_text;
+using cge_test::loops_csv_error;
 
 }  // namespace
 
@@ -238,7 +233,7 @@ TEST_CASE("ground-truth loops reader: malformed lines", "[metrics]") {
 }
 
 TEST_CASE("loops.csv reader: rows with and without a match", "[metrics]") {
-  const std::vector<LoopQuery> rows = read_csv_text(kHeader +
+  const std::vector<LoopQuery> rows = read_loops_csv_text(kHeader +
                                                     "1000.100000,,3,,,,,0,no_candidates\n"
                                                     "1000.200000,1000.000000,4,0,0.5,0.25,12,0,too_few_matches\r\n"
                                                     "1000.300000,1000.033333,5,1,0.75,0.875,60,1,accepted\n");
@@ -258,26 +253,26 @@ TEST_CASE("loops.csv reader: rows with and without a match", "[metrics]") {
   CHECK(rows[1].reason == "too_few_matches");
   CHECK(rows[2].accepted);
   CHECK(rows[2].query_keyframe == 5);
-  CHECK(read_csv_text(kHeader).empty());
+  CHECK(read_loops_csv_text(kHeader).empty());
 }
 
 TEST_CASE("loops.csv reader: malformed input", "[metrics]") {
-  CHECK_THAT(csv_error(""), Catch::Contains("loops.csv:1: no header line"));
-  CHECK_THAT(csv_error("query_timestamp,match_timestamp\n"), Catch::Contains("loops.csv:1: expected the header"));
-  CHECK_THAT(csv_error(kHeader + "1,,3,,,,,0\n"),
+  CHECK_THAT(loops_csv_error(""), Catch::Contains("loops.csv:1: no header line"));
+  CHECK_THAT(loops_csv_error("query_timestamp,match_timestamp\n"), Catch::Contains("loops.csv:1: expected the header"));
+  CHECK_THAT(loops_csv_error(kHeader + "1,,3,,,,,0\n"),
              Catch::Contains("loops.csv:2: expected 9 comma-separated fields, found 8"));
-  CHECK_THAT(csv_error(kHeader + ",,3,,,,,0,low_score\n"), Catch::Contains("loops.csv:2: query_timestamp is empty"));
-  CHECK_THAT(csv_error(kHeader + "t,,3,,,,,0,low_score\n"), Catch::Contains("loops.csv:2: query_timestamp 't'"));
-  CHECK_THAT(csv_error(kHeader + "1,,-3,,,,,0,low_score\n"), Catch::Contains("loops.csv:2: query_keyframe '-3'"));
-  CHECK_THAT(csv_error(kHeader + "1,0.5,3,1,high,,,0,low_score\n"), Catch::Contains("loops.csv:2: bow_score 'high'"));
-  CHECK_THAT(csv_error(kHeader + "1,0.5,3,1,,,,yes,low_score\n"),
+  CHECK_THAT(loops_csv_error(kHeader + ",,3,,,,,0,low_score\n"), Catch::Contains("loops.csv:2: query_timestamp is empty"));
+  CHECK_THAT(loops_csv_error(kHeader + "t,,3,,,,,0,low_score\n"), Catch::Contains("loops.csv:2: query_timestamp 't'"));
+  CHECK_THAT(loops_csv_error(kHeader + "1,,-3,,,,,0,low_score\n"), Catch::Contains("loops.csv:2: query_keyframe '-3'"));
+  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,high,,,0,low_score\n"), Catch::Contains("loops.csv:2: bow_score 'high'"));
+  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,yes,low_score\n"),
              Catch::Contains("loops.csv:2: accepted 'yes' is not 0 or 1"));
-  CHECK_THAT(csv_error(kHeader + "1,0.5,3,1,,,,0,\n"), Catch::Contains("loops.csv:2: reason is empty"));
-  CHECK_THAT(csv_error(kHeader + "1,0.5,3,1,,,,0,Low score\n"), Catch::Contains("loops.csv:2: reason 'Low score'"));
-  CHECK_THAT(csv_error(kHeader + "1,0.5,3,1,,,,1,low_score\n"),
+  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,0,\n"), Catch::Contains("loops.csv:2: reason is empty"));
+  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,0,Low score\n"), Catch::Contains("loops.csv:2: reason 'Low score'"));
+  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,1,low_score\n"),
              Catch::Contains("loops.csv:2: accepted is 1 but the reason is 'low_score'"));
-  CHECK_THAT(csv_error(kHeader + "1,0.5,3,1,,,,0,accepted\n"), Catch::Contains("loops.csv:2: accepted is 0"));
-  CHECK_THAT(csv_error(kHeader + "1,,3,,,,,1,accepted\n"), Catch::Contains("loops.csv:2: an accepted row needs"));
-  CHECK_THAT(csv_error(kHeader + "1,0.5,3,,,,,0,low_score\n"),
+  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,0,accepted\n"), Catch::Contains("loops.csv:2: accepted is 0"));
+  CHECK_THAT(loops_csv_error(kHeader + "1,,3,,,,,1,accepted\n"), Catch::Contains("loops.csv:2: an accepted row needs"));
+  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,,,,,0,low_score\n"),
              Catch::Contains("loops.csv:2: match_timestamp and match_keyframe"));
 }
