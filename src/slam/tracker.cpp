@@ -67,8 +67,34 @@ class KeypointGrid {
   std::vector<std::vector<int>> cells_;
 };
 
-int hamming(const cv::Mat& a, const cv::Mat& b, int row_b) {
-  return cv::hal::normHamming(a.ptr<std::uint8_t>(0), b.ptr<std::uint8_t>(row_b), a.cols);
+struct KeypointMatch {
+  int index = -1;  ///< keypoint, -1: none
+  int distance = INT_MAX;  ///< Hamming distance, bits
+};
+
+/// The static keypoint within radius_px of (u, v) whose descriptor is nearest to `descriptor`
+/// (32-byte row); none when the nearest is farther than max_hamming or fails the ratio test
+/// against the second nearest. Candidates are visited by grid cell, then index (deterministic).
+KeypointMatch best_keypoint_near(const Frame& frame, const KeypointGrid& grid, double u, double v, double radius_px,
+                       const std::uint8_t* descriptor, int max_hamming, double ratio) {
+  const double radius_sq = radius_px * radius_px;
+  int best = INT_MAX, second = INT_MAX, best_index = -1;
+  grid.for_each_near(u, v, radius_px, [&](int i) {
+    const cv::Point2f& kp = frame.keypoints[static_cast<std::size_t>(i)].pt;
+    const double du = kp.x - u, dv = kp.y - v;
+    if (du * du + dv * dv > radius_sq) return;
+    const int d = cv::hal::normHamming(descriptor, frame.descriptors.ptr<std::uint8_t>(i), frame.descriptors.cols);
+    if (d < best) {
+      second = best;
+      best = d;
+      best_index = i;
+    } else if (d < second) {
+      second = d;
+    }
+  });
+  if (best_index < 0 || best > max_hamming) return {};
+  if (second != INT_MAX && best >= ratio * second) return {};
+  return {best_index, best};
 }
 
 Eigen::Isometry3d from_rvec_tvec(const cv::Mat& rvec, const cv::Mat& tvec) {
@@ -126,32 +152,20 @@ int Tracker::match_by_projection(const Frame& frame, const Map& map, const std::
   std::vector<int> best_distance(static_cast<std::size_t>(frame.size()), INT_MAX);
   const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
   const double width = frame.image_size.width, height = frame.image_size.height;
-  const double radius_sq = radius_px * radius_px;
   for (const std::int64_t id : points) {
     const MapPoint& mp = map.map_point(id);
     const Eigen::Vector3d p_camera = T_camera_world * mp.position_world;
     if (p_camera.z() < kMinPointDepthM) continue;
     const Eigen::Vector2d uv = intrinsics_.project(p_camera);
     if (!(uv.x() >= 0 && uv.x() < width && uv.y() >= 0 && uv.y() < height)) continue;
-    int best = INT_MAX, second = INT_MAX, best_index = -1;
-    grid.for_each_near(uv.x(), uv.y(), radius_px, [&](int i) {
-      const cv::Point2f& kp = frame.keypoints[static_cast<std::size_t>(i)].pt;
-      const double du = kp.x - uv.x(), dv = kp.y - uv.y();
-      if (du * du + dv * dv > radius_sq) return;
-      const int d = hamming(mp.descriptor, frame.descriptors, i);
-      if (d < best) {
-        second = best;
-        best = d;
-        best_index = i;
-      } else if (d < second) {
-        second = d;
-      }
-    });
-    if (best_index < 0 || best > settings_.max_hamming) continue;
-    if (second != INT_MAX && best >= settings_.ratio * second) continue;
+    const std::uint8_t* descriptor = mp.descriptor.ptr<std::uint8_t>(0);
+    const KeypointMatch m = best_keypoint_near(frame, grid, uv.x(), uv.y(), radius_px, descriptor,
+                                               settings_.max_hamming, settings_.ratio);
+    if (m.index < 0) continue;
+    const int best_index = m.index;
     auto& slot = best_distance[static_cast<std::size_t>(best_index)];
-    if (best < slot) {
-      slot = best;
+    if (m.distance < slot) {
+      slot = m.distance;
       matches[static_cast<std::size_t>(best_index)] = id;
     }
   }
@@ -280,26 +294,14 @@ bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::
     const Eigen::Vector3d p_camera = T_camera_world * p_world;
     if (p_camera.z() < kMinPointDepthM) continue;
     const Eigen::Vector2d uv = intrinsics_.project(p_camera);
-    int best = INT_MAX, second = INT_MAX, best_index = -1;
-    grid.for_each_near(uv.x(), uv.y(), radius_px, [&](int i) {
-      const cv::Point2f& kp = frame.keypoints[static_cast<std::size_t>(i)].pt;
-      const double du = kp.x - uv.x(), dv = kp.y - uv.y();
-      if (du * du + dv * dv > radius_px * radius_px) return;
-      const int d = cv::hal::normHamming(last_descriptors_.ptr<std::uint8_t>(static_cast<int>(k)),
-                                         frame.descriptors.ptr<std::uint8_t>(i), last_descriptors_.cols);
-      if (d < best) {
-        second = best;
-        best = d;
-        best_index = i;
-      } else if (d < second) {
-        second = d;
-      }
-    });
-    if (best_index < 0 || best > settings_.max_hamming) continue;
-    if (second != INT_MAX && best >= settings_.ratio * second) continue;
+    const std::uint8_t* descriptor = last_descriptors_.ptr<std::uint8_t>(static_cast<int>(k));
+    const KeypointMatch m = best_keypoint_near(frame, grid, uv.x(), uv.y(), radius_px, descriptor,
+                                               settings_.max_hamming, settings_.ratio);
+    if (m.index < 0) continue;
+    const int best_index = m.index;
     auto& slot = best_distance[static_cast<std::size_t>(best_index)];
-    if (best < slot) {
-      slot = best;
+    if (m.distance < slot) {
+      slot = m.distance;
       source[static_cast<std::size_t>(best_index)] = static_cast<int>(k);
     }
   }
