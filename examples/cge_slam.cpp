@@ -336,14 +336,16 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
   using cge::slam::TrackingState;
   nlohmann::ordered_json j;
   const auto& frames = system.frames();
-  int tracked = 0, relocalised = 0;
+  int tracked = 0, odometry = 0, relocalised = 0;
   for (const auto& r : frames) {
     tracked += r.has_pose();
+    odometry += r.state == TrackingState::odometry;
     relocalised += r.state == TrackingState::relocalised;
   }
   j["frames"] = frames.size();
-  j["tracked_frames"] = tracked;
+  j["tracked_frames"] = tracked;  // every frame with a pose, odometry and relocalised ones included
   j["lost_frames"] = static_cast<int>(frames.size()) - tracked;
+  j["odometry_frames"] = odometry;
   j["relocalised_frames"] = relocalised;
   j["keyframes"] = system.map().keyframe_count();
   j["map_points"] = system.map().map_point_count();

@@ -21,6 +21,7 @@
 #include "cge/slam/map.hpp"
 #include "cge/slam/output_files.hpp"
 #include "cge/slam/system.hpp"
+#include "cge/slam/tracker.hpp"
 
 namespace {
 
@@ -326,4 +327,47 @@ TEST_CASE("Settings: modes parse and bad values are refused", "[slam]") {
   CHECK_THROWS_WITH(s.validate(), Catch::Contains("tracker.ratio"));
   CHECK(cge::slam::frame_seed(1, 0) != cge::slam::frame_seed(1, 1));
   CHECK(cge::slam::frame_seed(1, 0) != cge::slam::frame_seed(2, 0));
+}
+
+TEST_CASE("Tracker: when the local map fails, odometry against the previous frame keeps the pose and says so",
+          "[slam]") {
+  cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", 8, 3);
+  spec.people.clear();  // a static scene
+  const cge::sim::SequenceRenderer renderer(spec);
+  const cge::PinholeIntrinsics<double> K = intrinsics_of(renderer.camera());
+  cge::slam::SystemSettings settings;
+  settings.mode = DynamicMode::none;
+  cge::slam::FrameMaker maker(settings, K);
+  const auto make = [&](int i) {
+    const cge::sim::RenderedFrame r = renderer.render(i);
+    cge::slam::Frame f = maker.extract(r.index, r.timestamp_s, r.rgb, r.depth);
+    maker.label(f, {});
+    return f;
+  };
+  const cge::slam::Frame f0 = make(0), f2 = make(3);
+  cge::slam::Tracker tracker(settings.tracker, K);
+  cge::slam::Map map;
+  REQUIRE(tracker.track(f0, map).state == cge::slam::TrackingState::initialised);
+  // A map the local-map tracking cannot use: one keyframe whose 50 points lie behind the camera.
+  cge::slam::Keyframe kf;
+  for (int j = 0; j < 50; ++j) {
+    kf.keypoints.emplace_back(10.f * static_cast<float>(j), 10.f, 31.f);
+    kf.points_camera_m.emplace_back(0.01 * j, 0.0, -1.0);
+    kf.labels.push_back(FeatureLabel::static_feature);
+  }
+  kf.descriptors = cv::Mat::zeros(50, 32, CV_8UC1);
+  const int id = map.add_keyframe(kf);
+  for (int j = 0; j < 50; ++j) {
+    const std::int64_t p = map.add_map_point(Eigen::Vector3d(0.01 * j, 0.0, -1.0), kf.descriptors.row(j));
+    map.add_observation(p, id, j);
+  }
+  const cge::slam::TrackResult result = tracker.track(f2, map);  // three frames on
+  REQUIRE(result.state == cge::slam::TrackingState::odometry);
+  CHECK(std::string(cge::slam::to_string(result.state)) == "odometry");
+  CHECK(result.has_pose());
+  // Oracle: the ground-truth motion from frame 0 (the tracker's world) to frame 3.
+  const Eigen::Isometry3d truth = spec.T_world_camera[0].inverse() * spec.T_world_camera[3];
+  const double error_m = (result.T_world_camera.translation() - truth.translation()).norm();
+  INFO("moved " << truth.translation().norm() << " m, error " << error_m << " m");
+  CHECK(error_m < 0.3 * truth.translation().norm());  // standing still would fail this
 }

@@ -20,6 +20,8 @@ const char* to_string(TrackingState state) {
       return "initialised";
     case TrackingState::tracked:
       return "tracked";
+    case TrackingState::odometry:
+      return "odometry";
     case TrackingState::relocalised:
       return "relocalised";
     case TrackingState::lost:
@@ -447,6 +449,7 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
   if (!ok && last_has_pose_ && settings_.track_last_frame) {
     attempt = Attempt{};
     ok = track_last_frame(frame, map, prediction, attempt);
+    if (ok) state = TrackingState::odometry;
   }
   if (!ok) {
     ok = relocalise(frame, map, attempt);

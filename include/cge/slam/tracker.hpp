@@ -37,11 +37,12 @@ namespace slam {
 enum class TrackingState : std::uint8_t {
   initialised,  ///< first frame: the map starts here
   tracked,      ///< pose from the local map
+  odometry,     ///< the local map failed: pose from the previous frame's points (frame-to-frame odometry)
   relocalised,  ///< pose from relocalisation after a failure
   lost,         ///< no pose
 };
 
-/// "initialised", "tracked", "relocalised" or "lost".
+/// "initialised", "tracked", "odometry", "relocalised" or "lost".
 const char* to_string(TrackingState state);
 
 struct TrackResult {
