@@ -107,7 +107,16 @@ TEST_CASE("BinaryDescriptor: Hamming distance and byte order against bit-by-bit 
     const BinaryDescriptor d = cge::bow::descriptor_from_bytes(bytes);
     for (int j = 0; j < 256; ++j) REQUIRE(cge::bow::descriptor_bit(d, j) == (((bytes[j / 8] >> (j % 8)) & 1) != 0));
     for (int i = 0; i < 32; ++i) REQUIRE(cge::bow::descriptor_byte(d, i) == bytes[i]);
+    std::uint8_t other[32];
+    for (int i = 0; i < 32; ++i) other[i] = static_cast<std::uint8_t>(rng());
+    CHECK(cge::bow::hamming_distance_32_bytes(bytes, other) ==
+          hamming_oracle(d, cge::bow::descriptor_from_bytes(other)));
   }
+  // The extremes: equal rows, and complementary rows (every bit differs).
+  std::uint8_t zeros[32] = {}, ones[32];
+  for (std::uint8_t& b : ones) b = 0xff;
+  CHECK(cge::bow::hamming_distance_32_bytes(zeros, zeros) == 0);
+  CHECK(cge::bow::hamming_distance_32_bytes(zeros, ones) == 256);
 }
 
 TEST_CASE("Vocabulary: flat tree descent equals the exhaustive nearest word", "[bow]") {

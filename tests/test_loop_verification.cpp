@@ -15,9 +15,12 @@
 #include <utility>
 #include <vector>
 
+#include <opencv2/features2d.hpp>
+
 #include "cge/metrics/loop_precision_recall.hpp"
 #include "cge/metrics/loop_queries_io.hpp"
 #include "cge/slam/loop_closer.hpp"
+#include "cge/slam/two_nearest_descriptors.hpp"
 #include "loop_queries_text.hpp"
 #include "test_support.hpp"
 
@@ -281,4 +284,35 @@ TEST_CASE("loop evaluation: open query recall of random logs agrees with a brute
     if (open > 0) CHECK(e.open_query_recall == Approx(double(detected_open) / double(open)));
     if (open == 0) CHECK(std::isnan(e.open_query_recall));
   }
+}
+
+TEST_CASE("two_nearest_descriptors equals cv::BFMatcher's two nearest, ties included", "[loops]") {
+  // Oracle: OpenCV's brute-force matcher. Few distinct byte values make equal distances common, so
+  // the tie order (lower train index first) is exercised.
+  std::mt19937 rng(31);
+  for (const int train_rows : {0, 1, 2, 40, 300}) {
+    CAPTURE(train_rows);
+    cv::Mat query(60, 32, CV_8UC1), train(train_rows, 32, CV_8UC1);
+    for (int r = 0; r < query.rows; ++r)
+      for (int c = 0; c < 32; ++c) query.at<std::uint8_t>(r, c) = static_cast<std::uint8_t>(rng() % 4);
+    for (int r = 0; r < train.rows; ++r)
+      for (int c = 0; c < 32; ++c) train.at<std::uint8_t>(r, c) = static_cast<std::uint8_t>(rng() % 4);
+    std::vector<std::vector<cv::DMatch>> expected;
+    if (train_rows > 0) cv::BFMatcher(cv::NORM_HAMMING).knnMatch(query, train, expected, 2);
+    const std::vector<std::vector<cv::DMatch>> got = cge::slam::two_nearest_descriptors(query, train);
+    REQUIRE(got.size() == static_cast<std::size_t>(query.rows));
+    for (int q = 0; q < query.rows; ++q) {
+      CAPTURE(q);
+      const auto& g = got[static_cast<std::size_t>(q)];
+      REQUIRE(g.size() == static_cast<std::size_t>(std::min(train_rows, 2)));
+      for (std::size_t k = 0; k < g.size(); ++k) {
+        const cv::DMatch& e = expected[static_cast<std::size_t>(q)][k];
+        CHECK(g[k].queryIdx == e.queryIdx);
+        CHECK(g[k].trainIdx == e.trainIdx);
+        CHECK(g[k].distance == e.distance);
+      }
+    }
+  }
+  CHECK_THROWS_AS(cge::slam::two_nearest_descriptors(cv::Mat::zeros(2, 16, CV_8UC1), cv::Mat::zeros(2, 32, CV_8UC1)),
+                  std::invalid_argument);
 }

@@ -370,4 +370,9 @@ TEST_CASE("Tracker: when the local map fails, odometry against the previous fram
   const double error_m = (result.T_world_camera.translation() - truth.translation()).norm();
   INFO("moved " << truth.translation().norm() << " m, error " << error_m << " m");
   CHECK(error_m < 0.3 * truth.translation().norm());  // standing still would fail this
+
+  // Descriptors that are not ORB's 32 bytes are refused, naming the frame.
+  cge::slam::Frame bad = f2;
+  bad.descriptors = f2.descriptors.colRange(0, 16).clone();
+  CHECK_THROWS_WITH(tracker.track(bad, map), Catch::Contains("frame 3") && Catch::Contains("32-byte"));
 }

@@ -14,6 +14,7 @@
 
 #include "cge/opencv/keypoint.hpp"
 #include "cge/opencv/mask.hpp"
+#include "cge/slam/two_nearest_descriptors.hpp"
 
 namespace cge {
 namespace slam {
@@ -227,8 +228,7 @@ void LoopCloser::geometric_check(const Keyframe& current, const Keyframe& match,
   // then one query per match row (the closest; the smaller query index on ties).
   const cv::Mat qd = select_rows(current.descriptors, query_rows);
   const cv::Mat md = select_rows(match.descriptors, match_rows);
-  std::vector<std::vector<cv::DMatch>> knn;
-  cv::BFMatcher(cv::NORM_HAMMING).knnMatch(qd, md, knn, 2);
+  const std::vector<std::vector<cv::DMatch>> knn = two_nearest_descriptors(qd, md);
   std::map<int, cv::DMatch> by_match_row;  // keyed by match row index: deterministic order
   for (const auto& k : knn) {
     if (k.empty()) continue;

@@ -5,11 +5,14 @@
 #include <cmath>
 #include <set>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include <opencv2/calib3d.hpp>
-#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/features2d.hpp>
+
+#include "cge/bow/binary_descriptor.hpp"
+#include "cge/slam/two_nearest_descriptors.hpp"
 
 namespace cge {
 namespace slam {
@@ -85,7 +88,7 @@ KeypointMatch best_keypoint_near(const Frame& frame, const KeypointGrid& grid, d
     const cv::Point2f& kp = frame.keypoints[static_cast<std::size_t>(i)].pt;
     const double du = kp.x - u, dv = kp.y - v;
     if (du * du + dv * dv > radius_sq) return;
-    const int d = cv::hal::normHamming(descriptor, frame.descriptors.ptr<std::uint8_t>(i), frame.descriptors.cols);
+    const int d = bow::hamming_distance_32_bytes(descriptor, frame.descriptors.ptr<std::uint8_t>(i));
     if (d < best) {
       second = best;
       best = d;
@@ -391,7 +394,6 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
   for (int id = n - 1; id >= std::max(0, n - settings_.relocalisation_keyframes); --id) {
     if (std::find(candidates.begin(), candidates.end(), id) == candidates.end()) candidates.push_back(id);
   }
-  cv::BFMatcher matcher(cv::NORM_HAMMING);
   for (const int id : candidates) {
     const Keyframe& kf = map.keyframe(id);
     std::vector<std::int64_t> train_point;
@@ -402,8 +404,7 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
       train_point.push_back(kf.map_point_ids[k]);
     }
     if (static_cast<int>(train_point.size()) < settings_.min_relocalisation_inliers) continue;
-    std::vector<std::vector<cv::DMatch>> knn;
-    matcher.knnMatch(query, train, knn, 2);
+    const std::vector<std::vector<cv::DMatch>> knn = two_nearest_descriptors(query, train);
     std::vector<std::int64_t> matches(static_cast<std::size_t>(frame.size()), -1);
     std::vector<char> used(train_point.size(), 0);
     for (const auto& m : knn) {
@@ -427,6 +428,11 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
 }
 
 TrackResult Tracker::track(const Frame& frame, const Map& map) {
+  if (frame.size() > 0 && (frame.descriptors.type() != CV_8UC1 || frame.descriptors.cols != 32 ||
+                           frame.descriptors.rows != frame.size())) {
+    throw std::invalid_argument("Tracker::track: frame " + std::to_string(frame.index) +
+                                ": descriptors must be one 32-byte CV_8UC1 ORB row per keypoint");
+  }
   TrackResult result;
   result.map_point_ids.assign(static_cast<std::size_t>(frame.size()), -1);
   if (map.keyframe_count() == 0) {

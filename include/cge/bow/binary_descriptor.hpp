@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <string>
 
 namespace cge {
@@ -19,15 +20,15 @@ constexpr int descriptor_bits = 256;
 
 namespace detail {
 inline int popcount64(std::uint64_t x) {
-#if defined(__GNUC__) || defined(__clang__)
-  return __builtin_popcountll(x);
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__POPCNT__)
+  return __builtin_popcountll(x);  // one instruction
 #else
-  int n = 0;
-  while (x) {
-    x &= x - 1;
-    ++n;
-  }
-  return n;
+  // Without the POPCNT instruction (baseline x86-64) the builtin is a library call; this bit-sliced
+  // count is a dozen inline operations.
+  x = x - ((x >> 1) & 0x5555555555555555ULL);
+  x = (x & 0x3333333333333333ULL) + ((x >> 2) & 0x3333333333333333ULL);
+  x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0fULL;
+  return static_cast<int>((x * 0x0101010101010101ULL) >> 56);
 #endif
 }
 }  // namespace detail
@@ -36,6 +37,18 @@ inline int popcount64(std::uint64_t x) {
 inline int hamming_distance(const BinaryDescriptor& a, const BinaryDescriptor& b) {
   return detail::popcount64(a[0] ^ b[0]) + detail::popcount64(a[1] ^ b[1]) + detail::popcount64(a[2] ^ b[2]) +
          detail::popcount64(a[3] ^ b[3]);
+}
+
+/// Hamming distance of two 32-byte descriptor rows (e.g. rows of an OpenCV CV_8UC1 Mat), 0 .. 256.
+inline int hamming_distance_32_bytes(const std::uint8_t* a, const std::uint8_t* b) {
+  int distance = 0;
+  for (int w = 0; w < 4; ++w) {
+    std::uint64_t x, y;
+    std::memcpy(&x, a + 8 * w, 8);
+    std::memcpy(&y, b + 8 * w, 8);
+    distance += detail::popcount64(x ^ y);
+  }
+  return distance;
 }
 
 /// Bit j (0 .. 255) of a descriptor.
