@@ -65,8 +65,8 @@ const std::string kExtendedHeader =
     "query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,"
     "reason,tentative_matches,verified_keyframes,connected_keyframes\n";
 
-using cge_test::read_loops_csv_text;
 using cge_test::loops_csv_error;
+using cge_test::read_loops_csv_text;
 
 }  // namespace
 
@@ -102,10 +102,11 @@ TEST_CASE("LoopCloserSettings: verified_members and min_group_total_ratio are ch
 }
 
 TEST_CASE("loops.csv reader: the extended format's columns", "[loops]") {
-  const std::vector<LoopQuery> rows = read_loops_csv_text(kExtendedHeader +
-                                                    "1.000000,,3,,,,0,0,no_candidates,0,0,\n"
-                                                    "2.000000,0.500000,4,1,0.5,0.9,12,0,too_few_matches,12,3,0 2 3\n"
-                                                    "3.000000,0.600000,5,2,0.6,0.9,88,1,accepted,120,1,4\n");
+  const std::vector<LoopQuery> rows =
+      read_loops_csv_text(kExtendedHeader +
+                          "1.000000,,3,,,,0,0,no_candidates,0,0,\n"
+                          "2.000000,0.500000,4,1,0.5,0.9,12,0,too_few_matches,12,3,0 2 3\n"
+                          "3.000000,0.600000,5,2,0.6,0.9,88,1,accepted,120,1,4\n");
   REQUIRE(rows.size() == 3);
   CHECK(*rows[0].tentative_matches == 0);
   CHECK(*rows[0].verified_keyframes == 0);
@@ -132,9 +133,10 @@ TEST_CASE("loops.csv reader: the extended format's columns", "[loops]") {
              Catch::Contains("loops.csv:2: connected_keyframes '1  2' is not a list"));
   CHECK_THAT(loops_csv_error(kExtendedHeader + "1,,3,,,,0,0,no_candidates,0,0,2 1\n"),
              Catch::Contains("loops.csv:2: connected_keyframes '2 1' is not strictly ascending"));
-  CHECK_THAT(loops_csv_error("query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_"
-                       "points,accepted,reason,tentative_matches\n"),
-             Catch::Contains("loops.csv:1: expected the header"));
+  CHECK_THAT(
+      loops_csv_error("query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_"
+                      "points,accepted,reason,tentative_matches\n"),
+      Catch::Contains("loops.csv:1: expected the header"));
 }
 
 TEST_CASE("loop evaluation: misses by reason, connected and open loop queries (hand-worked)", "[loops]") {

@@ -42,8 +42,8 @@ const std::string kHeader =
     "query_timestamp,match_timestamp,query_keyframe,match_keyframe,bow_score,cge_score,matched_points,accepted,"
     "reason\n";
 
-using cge_test::read_loops_csv_text;
 using cge_test::loops_csv_error;
+using cge_test::read_loops_csv_text;
 
 }  // namespace
 
@@ -233,10 +233,11 @@ TEST_CASE("ground-truth loops reader: malformed lines", "[metrics]") {
 }
 
 TEST_CASE("loops.csv reader: rows with and without a match", "[metrics]") {
-  const std::vector<LoopQuery> rows = read_loops_csv_text(kHeader +
-                                                    "1000.100000,,3,,,,,0,no_candidates\n"
-                                                    "1000.200000,1000.000000,4,0,0.5,0.25,12,0,too_few_matches\r\n"
-                                                    "1000.300000,1000.033333,5,1,0.75,0.875,60,1,accepted\n");
+  const std::vector<LoopQuery> rows =
+      read_loops_csv_text(kHeader +
+                          "1000.100000,,3,,,,,0,no_candidates\n"
+                          "1000.200000,1000.000000,4,0,0.5,0.25,12,0,too_few_matches\r\n"
+                          "1000.300000,1000.033333,5,1,0.75,0.875,60,1,accepted\n");
   REQUIRE(rows.size() == 3);
   CHECK(rows[0].query_timestamp_s == 1000.1);
   CHECK_FALSE(rows[0].match_timestamp_s.has_value());
@@ -261,14 +262,17 @@ TEST_CASE("loops.csv reader: malformed input", "[metrics]") {
   CHECK_THAT(loops_csv_error("query_timestamp,match_timestamp\n"), Catch::Contains("loops.csv:1: expected the header"));
   CHECK_THAT(loops_csv_error(kHeader + "1,,3,,,,,0\n"),
              Catch::Contains("loops.csv:2: expected 9 comma-separated fields, found 8"));
-  CHECK_THAT(loops_csv_error(kHeader + ",,3,,,,,0,low_score\n"), Catch::Contains("loops.csv:2: query_timestamp is empty"));
+  CHECK_THAT(loops_csv_error(kHeader + ",,3,,,,,0,low_score\n"),
+             Catch::Contains("loops.csv:2: query_timestamp is empty"));
   CHECK_THAT(loops_csv_error(kHeader + "t,,3,,,,,0,low_score\n"), Catch::Contains("loops.csv:2: query_timestamp 't'"));
   CHECK_THAT(loops_csv_error(kHeader + "1,,-3,,,,,0,low_score\n"), Catch::Contains("loops.csv:2: query_keyframe '-3'"));
-  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,high,,,0,low_score\n"), Catch::Contains("loops.csv:2: bow_score 'high'"));
+  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,high,,,0,low_score\n"),
+             Catch::Contains("loops.csv:2: bow_score 'high'"));
   CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,yes,low_score\n"),
              Catch::Contains("loops.csv:2: accepted 'yes' is not 0 or 1"));
   CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,0,\n"), Catch::Contains("loops.csv:2: reason is empty"));
-  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,0,Low score\n"), Catch::Contains("loops.csv:2: reason 'Low score'"));
+  CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,0,Low score\n"),
+             Catch::Contains("loops.csv:2: reason 'Low score'"));
   CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,1,low_score\n"),
              Catch::Contains("loops.csv:2: accepted is 1 but the reason is 'low_score'"));
   CHECK_THAT(loops_csv_error(kHeader + "1,0.5,3,1,,,,0,accepted\n"), Catch::Contains("loops.csv:2: accepted is 0"));

@@ -228,7 +228,8 @@ TEST_CASE("local_bundle_adjustment leaves out points without a depth observation
   cge::slam::Map map;
   for (int k = 0; k < 4; ++k) {
     cge::slam::Keyframe kf;
-    kf.T_world_camera = k == 0 ? t.true_poses[0] : t.true_poses[static_cast<std::size_t>(k)] * random_motion(rng, 0.005, 0.01);
+    kf.T_world_camera =
+        k == 0 ? t.true_poses[0] : t.true_poses[static_cast<std::size_t>(k)] * random_motion(rng, 0.005, 0.01);
     const Eigen::Isometry3d T_camera_world = t.true_poses[static_cast<std::size_t>(k)].inverse();
     for (int j = 0; j < 60; ++j) {
       const Eigen::Vector3d p = T_camera_world * t.true_points[static_cast<std::size_t>(j)];

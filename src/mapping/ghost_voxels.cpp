@@ -51,15 +51,27 @@ std::set<std::uint16_t> moving_ids(const fs::path& csv) {
   return ids;
 }
 
+/// Sorts `v` by voxel_less (unless it already is) and removes repeats.
+void sort_unique(std::vector<VoxelIndex>& v) {
+  if (!std::is_sorted(v.begin(), v.end(), voxel_less)) std::sort(v.begin(), v.end(), voxel_less);
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+}
+
 /// Sorts and deduplicates `fresh`, then merges it into the sorted unique `into`.
 void merge_unique(std::vector<VoxelIndex>& into, std::vector<VoxelIndex>& fresh) {
-  std::sort(fresh.begin(), fresh.end(), voxel_less);
-  fresh.erase(std::unique(fresh.begin(), fresh.end()), fresh.end());
+  sort_unique(fresh);
   std::vector<VoxelIndex> merged;
   merged.reserve(into.size() + fresh.size());
   std::set_union(into.begin(), into.end(), fresh.begin(), fresh.end(), std::back_inserter(merged), voxel_less);
   into.swap(merged);
   fresh.clear();
+}
+
+/// Index of the first of the ascending `times` within max_difference_s of t_s, or -1.
+int first_within(const std::vector<double>& times, double t_s, double max_difference_s) {
+  const auto it = std::lower_bound(times.begin(), times.end(), t_s - max_difference_s);
+  if (it == times.end() || std::abs(*it - t_s) > max_difference_s) return -1;
+  return static_cast<int>(it - times.begin());
 }
 
 }  // namespace
@@ -95,11 +107,10 @@ GhostVoxels ghost_voxels_from_sequence(const fs::path& folder, double resolution
   // The frames to use and their poses in the map's frame: (frame index, T_map_camera).
   std::vector<std::pair<int, Eigen::Isometry3d>> used;
   if (own_poses) {
+    std::vector<double> frame_times;  // ascending: the sequence lists its frames in time order
+    for (int i = 0; i < sequence.frame_count(); ++i) frame_times.push_back(sequence.timestamp_s(i));
     for (const metrics::StampedPose& p : settings.frame_poses) {
-      int match = -1;
-      for (int i = 0; i < sequence.frame_count() && match < 0; ++i) {
-        if (std::abs(sequence.timestamp_s(i) - p.timestamp_s) <= settings.max_time_difference_s) match = i;
-      }
+      const int match = first_within(frame_times, p.timestamp_s, settings.max_time_difference_s);
       if (match < 0) {
         throw std::invalid_argument("ghost voxels: the frame pose at " + std::to_string(p.timestamp_s) +
                                     " s matches no frame of " + folder.string());
@@ -107,16 +118,16 @@ GhostVoxels ghost_voxels_from_sequence(const fs::path& folder, double resolution
       used.emplace_back(match, p.T_world_camera);
     }
   } else {
+    std::vector<double> truth_times;
+    for (const dataset::GroundTruthPose& p : truth) truth_times.push_back(p.timestamp_s);
     for (int i = 0; i < sequence.frame_count(); ++i) {
-      const double t_s = sequence.timestamp_s(i);
-      const auto it = std::lower_bound(truth.begin(), truth.end(), t_s - settings.max_time_difference_s,
-                                       [](const dataset::GroundTruthPose& p, double t) { return p.timestamp_s < t; });
-      if (it == truth.end() || std::abs(it->timestamp_s - t_s) > settings.max_time_difference_s) {
+      const int pose = first_within(truth_times, sequence.timestamp_s(i), settings.max_time_difference_s);
+      if (pose < 0) {
         throw std::invalid_argument("ghost voxels: no ground-truth pose for frame " +
                                     sequence.files(i).rgb_path.stem().string() + " in " +
                                     (folder / "groundtruth.txt").string());
       }
-      used.emplace_back(i, settings.T_map_world * it->T_world_camera);
+      used.emplace_back(i, settings.T_map_world * truth[static_cast<std::size_t>(pose)].T_world_camera);
     }
   }
   std::vector<VoxelIndex> person, still, fresh_person, fresh_still;
@@ -153,10 +164,8 @@ GhostVoxels ghost_voxels_from_sequence(const fs::path& folder, double resolution
 }
 
 std::vector<VoxelIndex> ghost_set(std::vector<VoxelIndex> person, std::vector<VoxelIndex> still) {
-  for (std::vector<VoxelIndex>* v : {&person, &still}) {
-    std::sort(v->begin(), v->end(), voxel_less);
-    v->erase(std::unique(v->begin(), v->end()), v->end());
-  }
+  sort_unique(person);  // the sequence's sets arrive sorted and unique: a linear check then
+  sort_unique(still);
   std::vector<VoxelIndex> ghost;
   std::set_difference(person.begin(), person.end(), still.begin(), still.end(), std::back_inserter(ghost), voxel_less);
   return ghost;

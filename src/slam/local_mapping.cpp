@@ -81,28 +81,30 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
   std::vector<std::int64_t> optimised_ids;
   std::vector<Eigen::Vector3d> points;
   std::vector<BundleObservation> observations;
-  std::vector<BundleObservation> of_point;
+  std::vector<BundleObservation> of_point;   // the point's observations taking part, pose index unset
+  std::vector<int> keyframe_of_observation;  // their keyframes
   for (const std::int64_t id : point_ids) {
     const MapPoint& p = map.map_point(id);
     of_point.clear();
+    keyframe_of_observation.clear();
     for (const Observation& o : p.observations) {
       if (!takes_part(o.keyframe_id)) continue;
       of_point.push_back(keyframe_bundle_observation(map.keyframe(o.keyframe_id), o.keypoint_index, -1,
                                                      static_cast<int>(points.size()), orb_scale_factor,
                                                      lm.depth_sigma_per_m));
-      of_point.back().keyframe = o.keyframe_id;  // a keyframe id until the point is known to enter
+      keyframe_of_observation.push_back(o.keyframe_id);
     }
-    const bool anchored =
-        std::any_of(of_point.begin(), of_point.end(), [](const BundleObservation& b) { return !std::isnan(b.depth_m); });
+    const bool anchored = std::any_of(of_point.begin(), of_point.end(),
+                                      [](const BundleObservation& b) { return !std::isnan(b.depth_m); });
     if (!anchored) {
       ++report.points_without_depth;
       continue;
     }
     optimised_ids.push_back(id);
     points.push_back(p.position_world);
-    for (BundleObservation& b : of_point) {
-      b.keyframe = index_of(b.keyframe);
-      observations.push_back(b);
+    for (std::size_t k = 0; k < of_point.size(); ++k) {
+      of_point[k].keyframe = index_of(keyframe_of_observation[k]);
+      observations.push_back(of_point[k]);
     }
   }
   if (points.empty() || fixed.empty()) return report;  // no gauge: no keyframe 0, no outside observers

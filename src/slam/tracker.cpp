@@ -73,7 +73,7 @@ class KeypointGrid {
 };
 
 struct KeypointMatch {
-  int index = -1;  ///< keypoint, -1: none
+  int index = -1;          ///< keypoint, -1: none
   int distance = INT_MAX;  ///< Hamming distance, bits
 };
 
@@ -81,7 +81,7 @@ struct KeypointMatch {
 /// (32-byte row); none when the nearest is farther than max_hamming or fails the ratio test
 /// against the second nearest. Candidates are visited by grid cell, then index (deterministic).
 KeypointMatch best_keypoint_near(const Frame& frame, const KeypointGrid& grid, double u, double v, double radius_px,
-                       const std::uint8_t* descriptor, int max_hamming, double ratio) {
+                                 const std::uint8_t* descriptor, int max_hamming, double ratio) {
   const double radius_sq = radius_px * radius_px;
   int best = INT_MAX, second = INT_MAX, best_index = -1;
   grid.for_each_near(u, v, radius_px, [&](int i) {
@@ -164,14 +164,13 @@ int Tracker::match_by_projection(const Frame& frame, const Map& map, const std::
     const Eigen::Vector2d uv = intrinsics_.project(p_camera);
     if (!(uv.x() >= 0 && uv.x() < width && uv.y() >= 0 && uv.y() < height)) continue;
     const std::uint8_t* descriptor = mp.descriptor.ptr<std::uint8_t>(0);
-    const KeypointMatch m = best_keypoint_near(frame, grid, uv.x(), uv.y(), radius_px, descriptor,
-                                               settings_.max_hamming, settings_.ratio);
+    const KeypointMatch m =
+        best_keypoint_near(frame, grid, uv.x(), uv.y(), radius_px, descriptor, settings_.max_hamming, settings_.ratio);
     if (m.index < 0) continue;
-    const int best_index = m.index;
-    auto& slot = best_distance[static_cast<std::size_t>(best_index)];
+    auto& slot = best_distance[static_cast<std::size_t>(m.index)];
     if (m.distance < slot) {
       slot = m.distance;
-      matches[static_cast<std::size_t>(best_index)] = id;
+      matches[static_cast<std::size_t>(m.index)] = id;
     }
   }
   return static_cast<int>(std::count_if(matches.begin(), matches.end(), [](std::int64_t m) { return m >= 0; }));
@@ -300,14 +299,13 @@ bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::
     if (p_camera.z() < kMinPointDepthM) continue;
     const Eigen::Vector2d uv = intrinsics_.project(p_camera);
     const std::uint8_t* descriptor = last_descriptors_.ptr<std::uint8_t>(static_cast<int>(k));
-    const KeypointMatch m = best_keypoint_near(frame, grid, uv.x(), uv.y(), radius_px, descriptor,
-                                               settings_.max_hamming, settings_.ratio);
+    const KeypointMatch m =
+        best_keypoint_near(frame, grid, uv.x(), uv.y(), radius_px, descriptor, settings_.max_hamming, settings_.ratio);
     if (m.index < 0) continue;
-    const int best_index = m.index;
-    auto& slot = best_distance[static_cast<std::size_t>(best_index)];
+    auto& slot = best_distance[static_cast<std::size_t>(m.index)];
     if (m.distance < slot) {
       slot = m.distance;
-      source[static_cast<std::size_t>(best_index)] = static_cast<int>(k);
+      source[static_cast<std::size_t>(m.index)] = static_cast<int>(k);
     }
   }
   std::vector<int> keypoints;
@@ -428,8 +426,8 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
 }
 
 TrackResult Tracker::track(const Frame& frame, const Map& map) {
-  if (frame.size() > 0 && (frame.descriptors.type() != CV_8UC1 || frame.descriptors.cols != 32 ||
-                           frame.descriptors.rows != frame.size())) {
+  if (frame.size() > 0 &&
+      (frame.descriptors.type() != CV_8UC1 || frame.descriptors.cols != 32 || frame.descriptors.rows != frame.size())) {
     throw std::invalid_argument("Tracker::track: frame " + std::to_string(frame.index) +
                                 ": descriptors must be one 32-byte CV_8UC1 ORB row per keypoint");
   }

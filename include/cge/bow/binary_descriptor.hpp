@@ -40,15 +40,12 @@ inline int hamming_distance(const BinaryDescriptor& a, const BinaryDescriptor& b
 }
 
 /// Hamming distance of two 32-byte descriptor rows (e.g. rows of an OpenCV CV_8UC1 Mat), 0 .. 256.
+/// (The words take the host's byte order, not descriptor_from_bytes's: a distance does not care.)
 inline int hamming_distance_32_bytes(const std::uint8_t* a, const std::uint8_t* b) {
-  int distance = 0;
-  for (int w = 0; w < 4; ++w) {
-    std::uint64_t x, y;
-    std::memcpy(&x, a + 8 * w, 8);
-    std::memcpy(&y, b + 8 * w, 8);
-    distance += detail::popcount64(x ^ y);
-  }
-  return distance;
+  BinaryDescriptor x, y;
+  std::memcpy(x.data(), a, sizeof x);
+  std::memcpy(y.data(), b, sizeof y);
+  return hamming_distance(x, y);
 }
 
 /// Bit j (0 .. 255) of a descriptor.

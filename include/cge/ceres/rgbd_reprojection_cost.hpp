@@ -21,8 +21,8 @@ namespace cge {
 class RgbdReprojectionCost final : public ceres::SizedCostFunction<3, 4, 3, 3> {
  public:
   /// inv_sigma_depth = 0: a pixel-only observation (the depth row is 0 with zero derivatives).
-  RgbdReprojectionCost(const PinholeIntrinsics<double>& intrinsics, const Eigen::Vector2d& pixel_px, double inv_sigma_px,
-                       double depth_m, double inv_sigma_depth, double min_depth_m)
+  RgbdReprojectionCost(const PinholeIntrinsics<double>& intrinsics, const Eigen::Vector2d& pixel_px,
+                       double inv_sigma_px, double depth_m, double inv_sigma_depth, double min_depth_m)
       : K_(intrinsics),
         pixel_px_(pixel_px),
         inv_sigma_px_(inv_sigma_px),

@@ -22,8 +22,7 @@ namespace slam {
 inline std::vector<std::vector<cv::DMatch>> two_nearest_descriptors(const cv::Mat& query, const cv::Mat& train) {
   const auto check = [](const cv::Mat& m, const char* name) {
     if (!m.empty() && (m.type() != CV_8UC1 || m.cols != 32)) {
-      throw std::invalid_argument(std::string("two_nearest_descriptors: ") + name +
-                                  " must hold 32-byte CV_8UC1 rows");
+      throw std::invalid_argument(std::string("two_nearest_descriptors: ") + name + " must hold 32-byte CV_8UC1 rows");
     }
   };
   check(query, "query");
