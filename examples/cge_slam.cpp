@@ -358,6 +358,14 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
   j["source"] = source;
   j["seed"] = opt.seed;
   j["loop_settings"] = loop_settings;
+  // The tracking and mapping settings the run used (the flags that change the trajectory).
+  const cge::slam::SystemSettings& used = system.settings();
+  j["mapping_settings"] = {{"tracking_depth_sigma", used.tracker.refinement_depth_sigma_per_m},
+                           {"local_ba", used.local_mapping.bundle_adjustment ? "on" : "off"},
+                           {"local_ba_window", used.local_mapping.covisible_keyframes},
+                           {"local_ba_fixed", used.local_mapping.fixed_keyframes},
+                           {"reference_min_observations", used.mapping.reference_min_observations},
+                           {"loop_correction", opt.loop_correction}};
   j["dynamic_leak"] = dynamic_leak(frames);
   nlohmann::ordered_json stages;
   for (int s = 0; s < cge::slam::kStageCount; ++s) {
@@ -640,7 +648,7 @@ int main(int argc, char** argv) {
   app.add_option("--tracking-depth-sigma", opt.tracking_depth_sigma,
                  "depth term of the tracking refinement: sigma_z = X * z^2 per matched keypoint with depth, 1/m; 0 = "
                  "pixels only")
-      ->check(CLI::NonNegativeNumber)
+      ->check(cge_tool::at_least_zero())
       ->capture_default_str();
   app.add_option("--local-ba", opt.local_ba,
                  "local bundle adjustment of the new keyframe's covisible window after each keyframe insertion "
@@ -649,11 +657,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--local-ba-window", opt.local_ba_window,
                  "local BA window: the new keyframe and at most this many most covisible keyframes, optimised")
-      ->check(CLI::NonNegativeNumber)
+      ->check(cge_tool::at_least_zero())
       ->capture_default_str();
   app.add_option("--local-ba-fixed", opt.local_ba_fixed,
                  "local BA fixed observers: at most this many further covisible keyframes, held fixed (0: none)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(cge_tool::at_least_zero())
       ->capture_default_str();
   app.add_option("--loop-scoring", opt.loop_scoring,
                  "what ranks and gates loop candidates: cge (S_sum, the paper), bow_only (BoW score), combined "
@@ -668,7 +676,7 @@ int main(int argc, char** argv) {
       ->each([&opt](const std::string&) { opt.loop_min_score_given = true; });
   app.add_option("--loop-verified-members", opt.loop_verified_members,
                  "geometric check of each verifiable group's best this many members; the most PnP inliers wins")
-      ->check(CLI::PositiveNumber)
+      ->check(cge_tool::above_zero())
       ->capture_default_str();
   app.add_option("--loop-verify-groups", opt.loop_verify_groups,
                  "which groups the geometric check verifies: best (the best-scored group only) or consistent (every "

@@ -163,7 +163,7 @@ int main(int argc, char** argv) {
   app.add_option("--out", opt.out, "vocabulary file to write; an existing file only with --force")->required();
   app.add_flag("--force", opt.force, "overwrite --out when it exists");
   app.add_option("--features", opt.training.orb_features, "ORB features per image, >= 1")
-      ->check(CLI::PositiveNumber)
+      ->check(cge_tool::above_zero())
       ->capture_default_str();
   app.add_option("--branching,-k", opt.training.vocabulary.branching, "children per node k, >= 2")
       ->check(CLI::Range(2, 1000))
@@ -172,14 +172,14 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 16))
       ->capture_default_str();
   app.add_option("--iterations", opt.training.vocabulary.max_iterations, "k-medians rounds per node at most")
-      ->check(CLI::PositiveNumber)
+      ->check(cge_tool::above_zero())
       ->capture_default_str();
   app.add_option("--seed", opt.training.seed, "seed of the k-means++ draws")->capture_default_str();
   app.add_option("--step", opt.step, "use every step-th image, >= 1")
-      ->check(CLI::PositiveNumber)
+      ->check(cge_tool::above_zero())
       ->capture_default_str();
   app.add_option("--max-images", opt.max_images, "use at most this many images (0: all)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(cge_tool::at_least_zero())
       ->capture_default_str();
   if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
   return cge_tool::run_reporting_errors(kProgram, nullptr, [&] { return run(opt); });

@@ -5,6 +5,7 @@
 // the library).
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <stdexcept>
 #include <string>
@@ -61,6 +62,30 @@ inline bool standard_output_written(const char* program) {
   if (std::cout && !std::ferror(stdout)) return true;
   std::fprintf(stderr, "%s: error: cannot write to standard output\n", program);
   return false;
+}
+
+/// Option checks with short messages ("must be >= 0, got -2"); CLI11's own NonNegativeNumber and
+/// PositiveNumber print the range with the largest double written out in full. A value that is not
+/// a number passes through to CLI11's conversion, which reports it.
+inline CLI::Validator at_least_zero() {
+  return CLI::Validator(
+      [](const std::string& text) {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || value >= 0) return std::string();
+        return "must be >= 0, got " + text;
+      },
+      ">= 0");
+}
+inline CLI::Validator above_zero() {
+  return CLI::Validator(
+      [](const std::string& text) {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || value > 0) return std::string();
+        return "must be > 0, got " + text;
+      },
+      "> 0");
 }
 
 /// Parses the command line as every tool does. Returns -1 when the tool should go on; otherwise

@@ -3,6 +3,8 @@
 # 1. rendered walking_xyz (no --dataset), mode none: every frame has ground truth, nothing is
 #    filtered, so moving_kept == moving_keypoints in frames.csv and summary.json; loop_settings
 #    holds the defaults (combined, min_cge_score 0.5, normalised).
+#    mapping_settings holds the tracking and local-BA defaults.
+# 1b. --tracking-depth-sigma 0 and --local-ba off are recorded and change the trajectory.
 # 2. --loop-scoring bow_only --loop-min-score 0.1 --cge-scaling raw are recorded in loop_settings.
 # 3. (with cge_sim) the same sequence written to a folder: the masks/ folder gives the same
 #    moving_keypoints per frame as the in-process renderer's labels; without masks/instances.csv
@@ -85,6 +87,32 @@ expect_json("${summary}" combined loop_settings scoring)
 expect_json("${summary}" "0\\.50*" loop_settings min_score)
 expect_json("${summary}" min_cge_score loop_settings min_score_setting)
 expect_json("${summary}" normalised loop_settings cge_scaling)
+expect_json("${summary}" "0\\.0030*1?" mapping_settings tracking_depth_sigma)
+expect_json("${summary}" on mapping_settings local_ba)
+expect_json("${summary}" 10 mapping_settings local_ba_window)
+expect_json("${summary}" 10 mapping_settings local_ba_fixed)
+expect_json("${summary}" 1 mapping_settings reference_min_observations)
+expect_json("${summary}" pgo\\+ba mapping_settings loop_correction)
+file(READ "${WORK}/rendered/trajectory.txt" default_trajectory)
+
+# 1b. The tracking and local-BA flags reach the run: each is recorded and changes the trajectory
+#     (mode none makes a keyframe almost every frame, so the local BA runs in these frames).
+run_tool(0 "${EXE}" ${common} --mode none --tracking-depth-sigma 0 --out "${WORK}/pixels_only")
+expect_json("${WORK}/pixels_only/summary.json" "0(\\.0*)?" mapping_settings tracking_depth_sigma)
+file(READ "${WORK}/pixels_only/trajectory.txt" trajectory)
+if(trajectory STREQUAL default_trajectory)
+  message(FATAL_ERROR "--tracking-depth-sigma 0 left the trajectory unchanged")
+endif()
+run_tool(0 "${EXE}" ${common} --mode none --local-ba off --local-ba-window 3 --local-ba-fixed 0
+         --out "${WORK}/no_local_ba")
+set(summary "${WORK}/no_local_ba/summary.json")
+expect_json("${summary}" off mapping_settings local_ba)
+expect_json("${summary}" 3 mapping_settings local_ba_window)
+expect_json("${summary}" 0 mapping_settings local_ba_fixed)
+file(READ "${WORK}/no_local_ba/trajectory.txt" trajectory)
+if(trajectory STREQUAL default_trajectory)
+  message(FATAL_ERROR "--local-ba off left the trajectory unchanged")
+endif()
 
 # 2.
 run_tool(0 "${EXE}" ${common} --mode none --loop-scoring bow_only --loop-min-score 0.1 --cge-scaling raw
