@@ -316,6 +316,15 @@ TEST_CASE("Vocabulary: malformed files give errors naming the line", "[bow]") {
   CHECK_THAT(load_error("CGE_VOCABULARY 1\nbranching 1 depth 2 training_images 3 nodes 3\n"),
              Catch::Contains("vocab.txt:2") && Catch::Contains("branching"));
   CHECK_THAT(load_error(header + "0 0.5 " + hex + "\n"), Catch::Contains("ends after 1 of 2"));
+  // A node count the tree cannot hold (found by fuzzing: it reserved 35 GB before reading a node).
+  CHECK_THAT(load_error("CGE_VOCABULARY 1\nbranching 3 depth 2 training_images 2 nodes 554042618\n0 0 " + hex + "\n"),
+             Catch::Contains("vocab.txt:2") && Catch::Contains("exceeds the 13 nodes"));
+  {
+    // The largest count the shape allows is accepted as far as the header goes.
+    std::istringstream in("CGE_VOCABULARY 1\nbranching 2 depth 1 training_images 3 nodes 3\n0 0.5 " + hex + "\n0 0 " +
+                          std::string(64, 'b') + "\n");
+    CHECK(Vocabulary::load(in).word_count() == 2);
+  }
   CHECK_THAT(load_error(header + "0 0.5 " + hex + "\n0 0.5 " + hex.substr(2) + "\n"),
              Catch::Contains("vocab.txt:4") && Catch::Contains("64 hex digits"));
   CHECK_THAT(load_error(header + "0 0.5 " + hex + "\n0 0.5 " + std::string(63, 'a') + "g\n"),

@@ -501,9 +501,23 @@ inline Vocabulary Vocabulary::load(std::istream& in, const std::string& source) 
     }
     if (v.training_images_ < 0) fail("training_images must not be negative");
     if (node_count < 1 || node_count > 2000000000LL) fail("nodes must be in 1 .. 2e9");
+    // A tree of branching k and depth L has at most 1 + k + ... + k^L nodes (at most 2e9, as
+    // validate() bounds k^L by 1e9): a larger count is a damaged header, refused before anything
+    // is allocated for it.
+    long long most = 1, level = 1;
+    for (int d = 0; d < v.depth_; ++d) {
+      level *= v.branching_;
+      most += level;
+    }
+    if (node_count > most) {
+      fail("nodes " + std::to_string(node_count) + " exceeds the " + std::to_string(most) +
+           " nodes a tree of branching " + std::to_string(v.branching_) + " and depth " + std::to_string(v.depth_) +
+           " can have");
+    }
   }
   v.nodes_.assign(1, Node{});
-  v.nodes_.reserve(static_cast<std::size_t>(node_count));
+  // Reserve for what a real file holds at most; a longer one grows as its lines arrive.
+  v.nodes_.reserve(static_cast<std::size_t>(std::min<long long>(node_count, 1LL << 20)));
   std::vector<int> node_line(1, 0);
   for (long long id = 1; id < node_count; ++id) {
     if (!next_line())
