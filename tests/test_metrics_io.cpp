@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -110,6 +111,19 @@ TEST_CASE("TUM reader: the quaternion tolerance is a setting", "[metrics]") {
   CHECK_THAT(tum_error("1 0 0 0 0 0 0 1.0001\n", strict), Catch::Contains("traj.txt:1: quaternion norm"));
   strict.max_quaternion_norm_error = -1;
   CHECK_THAT(tum_error("1 0 0 0 0 0 0 1\n", strict), Catch::Contains("max_quaternion_norm_error"));
+}
+
+TEST_CASE("TUM reader: positions beyond max_abs_translation_m are refused, naming the field", "[metrics]") {
+  // The default bound (1e6 m): 1000 km passes, beyond it the line is refused.
+  CHECK(read_text("1 1000000 -1000000 0 0 0 0 1\n").size() == 1);
+  CHECK_THAT(tum_error("1 0 0 0 0 0 0 1\n2 02010625800 0 0 0 0 0 1\n"),
+             Catch::Contains("traj.txt:2: tx '02010625800' lies beyond 1e+06 m"));
+  CHECK_THAT(tum_error("1 0 0 -3e9 0 0 0 1\n"), Catch::Contains("traj.txt:1: tz '-3e9'"));
+  TumReadSettings any;
+  any.max_abs_translation_m = std::numeric_limits<double>::infinity();
+  CHECK(read_text("1 0 0 -3e9 0 0 0 1\n", any).size() == 1);
+  any.max_abs_translation_m = 0;
+  CHECK_THAT(tum_error("1 0 0 0 0 0 0 1\n", any), Catch::Contains("max_abs_translation_m must be > 0"));
 }
 
 TEST_CASE("TUM reader: keep_last replaces a pose with a repeated stamp, as the TUM tools do", "[metrics]") {
