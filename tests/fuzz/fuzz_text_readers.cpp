@@ -1,0 +1,101 @@
+// Fuzz harness of the toolkit's text readers: the first byte of an input picks the reader, the
+// rest is the text. A reader may refuse its input only with std::invalid_argument (cge::ParseError
+// derives from it); anything else escaping, a sanitizer report, or a broken check below is a
+// finding. Where a reader accepts, the harness also runs what a tool would run next and checks
+// one property of the result that must hold whatever the input:
+//   0 edge list -> degree-degree entropy and edge entropy, finite
+//   1 edge list with one-based ids
+//   2 point list -> GraphBuilder on a 640 x 480 image -> degree-degree entropy, finite
+//   3 TUM trajectory -> ATE of the trajectory against itself, zero
+//   4 ground-truth loops, 5 loops.csv queries, 6 vocabulary, 7 TUM image list
+// Built two ways (tests/fuzz/CMakeLists.txt): with libFuzzer when CGE_BUILD_FUZZERS is on (Clang),
+// and always as cge_fuzz_replay, which ctest runs over tests/fuzz/corpus.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "cge/bow/vocabulary.hpp"
+#include "cge/dataset/tum_list.hpp"
+#include "cge/entropy/degree_degree_entropy.hpp"
+#include "cge/entropy/shannon_edge_entropy.hpp"
+#include "cge/graph/graph_builder.hpp"
+#include "cge/io/graph_text.hpp"
+#include "cge/metrics/ate.hpp"
+#include "cge/metrics/ground_truth_loops_io.hpp"
+#include "cge/metrics/loop_queries_io.hpp"
+#include "cge/metrics/tum_trajectory_io.hpp"
+
+namespace {
+
+// Entropy inputs stay small, so that one input runs in milliseconds.
+constexpr std::int32_t kMaxVertices = 200;
+constexpr std::int32_t kMaxEntropyNodes = 300;
+
+void require(bool ok, const char* what) {
+  if (ok) return;
+  std::fprintf(stderr, "fuzz_text_readers: property broken: %s\n", what);
+  std::abort();
+}
+
+void entropies_are_finite(const cge::Graph<double>& g) {
+  if (g.num_nodes() == 0 || g.num_nodes() > kMaxEntropyNodes) return;
+  const auto r = cge::DegreeDegreeEntropy<double>{}.compute(g);
+  require(std::isfinite(r.entropy_bits) && std::isfinite(r.information_index), "degree-degree entropy is finite");
+  require(std::isfinite(cge::ShannonEdgeEntropy<double>{}.compute(g)), "edge entropy is finite");
+}
+
+void run(int reader, std::istream& in) {
+  switch (reader) {
+    case 0:
+    case 1: {
+      cge::io::EdgeListOptions options;
+      options.one_based = reader == 1;
+      options.max_vertices = kMaxVertices;
+      entropies_are_finite(cge::io::read_edge_list(in, "fuzz", options));
+      break;
+    }
+    case 2: {
+      const cge::io::PointList list = cge::io::read_point_list(in, "fuzz");
+      cge::ImageRegion<double> image;
+      image.width_px = 640;
+      image.height_px = 480;
+      entropies_are_finite(cge::GraphBuilder<double>{}.build(image, list.points, list.instances));
+      break;
+    }
+    case 3: {
+      const cge::metrics::Trajectory t = cge::metrics::read_tum_trajectory(in, "fuzz");
+      if (t.empty()) break;
+      require(cge::metrics::compute_ate(t, t).translation_m.rmse < 1e-6, "ATE of a trajectory against itself is 0");
+      break;
+    }
+    case 4:
+      (void)cge::metrics::read_ground_truth_loops(in, "fuzz");
+      break;
+    case 5:
+      (void)cge::metrics::read_loop_queries(in, "fuzz");
+      break;
+    case 6:
+      (void)cge::bow::Vocabulary::load(in, "fuzz");
+      break;
+    default:
+      (void)cge::dataset::parse_tum_list(in, "fuzz");
+      break;
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return 0;
+  std::istringstream in(std::string(reinterpret_cast<const char*>(data) + 1, size - 1));
+  try {
+    run(data[0] % 8, in);
+  } catch (const std::invalid_argument&) {
+    // the reader refused the input: the expected outcome for most inputs
+  }
+  return 0;
+}
