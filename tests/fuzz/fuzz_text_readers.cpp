@@ -5,7 +5,8 @@
 // one property of the result that must hold whatever the input:
 //   0 edge list -> degree-degree entropy and edge entropy, finite
 //   1 edge list with one-based ids
-//   2 point list -> GraphBuilder on a 640 x 480 image -> degree-degree entropy, finite
+//   2 point list -> GraphBuilder on a 640 x 480 image, the same graph with the grid and the
+//     brute-force neighbour search -> degree-degree entropy, finite
 //   3 TUM trajectory -> ATE of the trajectory against itself, zero
 //   4 ground-truth loops, 5 loops.csv queries, 6 vocabulary, 7 TUM image list
 // Built two ways (tests/fuzz/CMakeLists.txt): with libFuzzer when CGE_BUILD_FUZZERS is on (Clang),
@@ -63,7 +64,11 @@ void run(int reader, std::istream& in) {
       cge::ImageRegion<double> image;
       image.width_px = 640;
       image.height_px = 480;
-      entropies_are_finite(cge::GraphBuilder<double>{}.build(image, list.points, list.instances));
+      const cge::Graph<double> g = cge::GraphBuilder<double>{}.build(image, list.points, list.instances);
+      const cge::Graph<double> reference =
+          cge::GraphBuilder<double, cge::BruteForceNeighborSearch<double>>{}.build(image, list.points, list.instances);
+      require(g == reference, "the grid and brute-force neighbour searches build the same graph");
+      entropies_are_finite(g);
       break;
     }
     case 3: {
