@@ -21,7 +21,6 @@
 #include <charconv>
 #include <cmath>
 #include <cstddef>
-#include <cstdio>
 #include <istream>
 #include <ostream>
 #include <stdexcept>
@@ -64,11 +63,16 @@ struct TumReadSettings {
 };
 
 namespace detail {
-/// A setting in a message: 1e+06 rather than std::to_string's 1000000.000000.
-inline std::string number_text(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", value);
-  return text;
+/// `value` by std::to_chars (locale-independent), with one spelling of zero; used by the writer
+/// and for settings in the reader's messages.
+inline std::string format_number(double value, std::chars_format format, int precision) {
+  char buf[64];
+  const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, value, format, precision);
+  if (r.ec != std::errc()) throw std::invalid_argument("cannot format number");
+  std::string s(buf, r.ptr);
+  // No "-0" or "-0.000000": one spelling of zero.
+  if (!s.empty() && s.front() == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+  return s;
 }
 }  // namespace detail
 
@@ -104,7 +108,8 @@ inline Trajectory read_tum_trajectory(std::istream& in, const std::string& sourc
     for (std::size_t i = 1; i <= 3; ++i) {
       if (!(std::abs(v[i]) <= settings.max_abs_translation_m)) {
         reader.fail(std::string(kNames[i]) + " " + detail::quoted(fields[i]) + " lies beyond " +
-                    detail::number_text(settings.max_abs_translation_m) + " m (not metres? see max_abs_translation_m)");
+                    detail::format_number(settings.max_abs_translation_m, std::chars_format::general, 6) +
+                    " m (not metres? see max_abs_translation_m)");
       }
     }
     Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // w, x, y, z
@@ -154,19 +159,6 @@ inline Trajectory read_tum_trajectory_file(const std::string& path, const TumRea
   return read_tum_trajectory(file, path, settings, report);
 }
 
-namespace detail {
-
-inline std::string format_number(double value, std::chars_format format, int precision) {
-  char buf[64];
-  const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, value, format, precision);
-  if (r.ec != std::errc()) throw std::invalid_argument("cannot format number");
-  std::string s(buf, r.ptr);
-  // No "-0" or "-0.000000": one spelling of zero.
-  if (!s.empty() && s.front() == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-  return s;
-}
-
-}  // namespace detail
 
 /// One trajectory line without the newline: timestamp with 6 decimals, the rest with 9 significant
 /// digits, quaternion with qw >= 0 (when qw == 0, the first non-zero of qx, qy, qz positive).
