@@ -67,26 +67,19 @@ inline bool standard_output_written(const char* program) {
 /// Option checks with short messages ("must be >= 0, got -2"); CLI11's own NonNegativeNumber and
 /// PositiveNumber print the range with the largest double written out in full. A value that is not
 /// a number passes through to CLI11's conversion, which reports it.
-inline CLI::Validator at_least_zero() {
+inline CLI::Validator sign_check(bool zero_allowed) {
+  const std::string rule = zero_allowed ? ">= 0" : "> 0";
   return CLI::Validator(
-      [](const std::string& text) {
+      [zero_allowed, rule](const std::string& text) {
         char* end = nullptr;
         const double value = std::strtod(text.c_str(), &end);
-        if (end == text.c_str() || *end != '\0' || value >= 0) return std::string();
-        return "must be >= 0, got " + text;
+        if (end == text.c_str() || *end != '\0' || value > 0 || (zero_allowed && value == 0)) return std::string();
+        return "must be " + rule + ", got " + text;
       },
-      ">= 0");
+      rule);
 }
-inline CLI::Validator above_zero() {
-  return CLI::Validator(
-      [](const std::string& text) {
-        char* end = nullptr;
-        const double value = std::strtod(text.c_str(), &end);
-        if (end == text.c_str() || *end != '\0' || value > 0) return std::string();
-        return "must be > 0, got " + text;
-      },
-      "> 0");
-}
+inline CLI::Validator at_least_zero() { return sign_check(true); }
+inline CLI::Validator above_zero() { return sign_check(false); }
 
 /// Parses the command line as every tool does. Returns -1 when the tool should go on; otherwise
 /// the exit code: 0 after --help or --version (CLI11 printed them), kExitUsage after a parse error
