@@ -1,8 +1,8 @@
 #pragma once
 // The portable kernel of shortest_path_degree_sums (ALGORITHMS.md section 4): the BFS dynamic
 // programme from 64 sources at once, one bit per source, with the values of every (node, source)
-// kept in one node-indexed block of 64 lanes. Also the grouping of sources into blocks, which
-// every kernel shares.
+// kept in one node-indexed block of 64 lanes. Also what every kernel shares: the grouping of
+// sources into blocks and the rescaling rule of TieMode::mean.
 
 #include <algorithm>
 #include <cmath>
@@ -51,6 +51,22 @@ std::vector<std::int32_t> local_source_order(const Graph<Scalar>& g) {
   }
   return order;
 }
+
+/// TieMode::mean needs only the ratio S / N, and every later level is linear in this one, so a
+/// lane whose path counts grow huge has its whole level scaled by kMeanRescaleFactor: exact (a
+/// power of two), and N never overflows however tie-rich the graph. TieMode::all needs the true
+/// sums and reports overflow instead. Returns the lanes of `active_lanes` whose largest count on
+/// this level, level_max_count[lane], passed 2^512. Every kernel rescales the same lanes.
+inline std::uint64_t lanes_to_rescale(std::uint64_t active_lanes, const double* level_max_count) {
+  const double threshold = std::ldexp(1.0, 512);
+  std::uint64_t large = 0;
+  for (std::uint64_t m = active_lanes; m; m &= m - 1) {
+    const int i = lowest_bit(m);
+    if (level_max_count[i] > threshold) large |= std::uint64_t(1) << i;
+  }
+  return large;
+}
+inline double mean_rescale_factor() { return std::ldexp(1.0, -512); }
 
 /// Delta rows of up to 64 sources at once. Level-synchronous BFS with one bit per source:
 ///   reach_k[u] = (OR over neighbours p of reach_{k-1}[p]) & ~visited[u]
@@ -169,19 +185,11 @@ class BitParallelDegreeSums {
   }
 
  private:
-  /// TieMode::mean needs only the ratio S / N, and every later level is linear in this one, so a
-  /// lane whose path counts grow huge has this whole level scaled by 2^-512: exact (a power of
-  /// two), and N never overflows however tie-rich the graph. TieMode::all needs the true sums and
-  /// reports overflow instead.
+  /// TieMode::mean: scales the lanes_to_rescale of this level by mean_rescale_factor().
   void rescale_large_counts(std::uint64_t active_lanes, const double* level_max_count) {
-    const double threshold = std::ldexp(1.0, 512);
-    const double factor = std::ldexp(1.0, -512);
-    std::uint64_t large = 0;
-    for (std::uint64_t m = active_lanes; m; m &= m - 1) {
-      const int i = lowest_bit(m);
-      if (level_max_count[i] > threshold) large |= std::uint64_t(1) << i;
-    }
+    const std::uint64_t large = lanes_to_rescale(active_lanes, level_max_count);
     if (!large) return;
+    const double factor = mean_rescale_factor();
     for (const std::int32_t u : next_frontier_) {
       Values* at_u = &values_[static_cast<std::size_t>(u) * 64];
       for (std::uint64_t m = current_[static_cast<std::size_t>(u)] & large; m; m &= m - 1) {

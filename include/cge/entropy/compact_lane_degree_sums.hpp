@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "cge/core/bits.hpp"
+#include "cge/entropy/bit_parallel_degree_sums.hpp"
 #include "cge/entropy/degree_sum_table.hpp"
 #include "cge/graph/graph.hpp"
 
@@ -221,17 +222,12 @@ class CompactLaneDegreeSums {
     }
   }
 
-  /// TieMode::mean: as in BitParallelDegreeSums, a lane whose counts pass 2^512 has this whole
-  /// level scaled by 2^-512 (exact).
+  /// TieMode::mean: scales the lanes_to_rescale of this level by mean_rescale_factor(), as
+  /// BitParallelDegreeSums does.
   void rescale_large_counts(std::uint64_t active_lanes, const double* level_max_count) {
-    const double threshold = std::ldexp(1.0, 512);
-    const double factor = std::ldexp(1.0, -512);
-    std::uint64_t large = 0;
-    for (std::uint64_t m = active_lanes; m; m &= m - 1) {
-      const int i = lowest_bit(m);
-      if (level_max_count[i] > threshold) large |= std::uint64_t(1) << i;
-    }
+    const std::uint64_t large = lanes_to_rescale(active_lanes, level_max_count);
     if (!large) return;
+    const double factor = mean_rescale_factor();
     for (const std::int32_t u : next_frontier_) {
       std::int32_t k = offset_current_[static_cast<std::size_t>(u)];
       for (std::uint64_t m = current_[static_cast<std::size_t>(u)]; m; m &= m - 1, ++k) {
