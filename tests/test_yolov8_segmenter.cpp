@@ -201,6 +201,33 @@ std::string shared_file(const std::string& relative) { return std::string(CGE_SH
 
 // ---- letterbox ---------------------------------------------------------------------------------
 
+/// A random decoding case on a 16 x 16 prototype grid for the naive-oracle tests: random
+/// prototypes, and three detections of different classes (so that suppression keeps all three)
+/// with centres on the letterboxed image and boxes that may cross its border.
+struct RandomDecodeCase {
+  cv::Mat protos;
+  std::vector<std::pair<int, Det>> dets;
+};
+RandomDecodeCase random_decode_case(const cge::Letterbox& lb, std::mt19937& rng) {
+  std::normal_distribution<float> normal(0.f, 1.f);
+  std::uniform_real_distribution<float> uniform(0.f, 1.f);
+  RandomDecodeCase c;
+  c.protos = prototypes(16, 16);
+  for (int k = 0; k < cge::kYolov8MaskCoefficients; ++k) {
+    for (int r = 0; r < 16; ++r) {
+      for (int col = 0; col < 16; ++col) proto_at(c.protos, k, r, col) = 2 * normal(rng);
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    const float cx = static_cast<float>(lb.pad_left_px) + static_cast<float>(lb.scaled_size.width) * uniform(rng);
+    const float cy = static_cast<float>(lb.pad_top_px) + static_cast<float>(lb.scaled_size.height) * uniform(rng);
+    Det d{cx, cy, 6 + 40 * uniform(rng), 6 + 40 * uniform(rng), i, 0.5f + 0.1f * static_cast<float>(i)};
+    for (float& w : d.coefficients) w = normal(rng);
+    c.dets.push_back({2 * i + 1, d});
+  }
+  return c;
+}
+
 TEST_CASE("Letterbox: hand-worked scales and paddings", "[segmentation][yolov8]") {
   struct Case {
     cv::Size image, input, scaled;
@@ -285,26 +312,9 @@ TEST_CASE("decode_yolov8_seg: masks equal a naive pixel-by-pixel oracle", "[segm
   // Random prototypes and coefficients, letterboxes with scaling and padding on either side.
   const cv::Size images[] = {{100, 60}, {60, 100}, {64, 64}, {37, 91}};
   std::mt19937 rng(20250707);
-  std::normal_distribution<float> normal(0.f, 1.f);
-  std::uniform_real_distribution<float> uniform(0.f, 1.f);
   for (const cv::Size image : images) {
     const cge::Letterbox lb = cge::make_letterbox(image, {64, 64});
-    cv::Mat protos = prototypes(16, 16);
-    for (int k = 0; k < cge::kYolov8MaskCoefficients; ++k) {
-      for (int r = 0; r < 16; ++r) {
-        for (int c = 0; c < 16; ++c) proto_at(protos, k, r, c) = 2 * normal(rng);
-      }
-    }
-    std::vector<std::pair<int, Det>> dets;
-    for (int i = 0; i < 3; ++i) {
-      // Different classes, so that suppression keeps all three; centres on the image, boxes may
-      // cross its border.
-      const float cx = static_cast<float>(lb.pad_left_px) + static_cast<float>(lb.scaled_size.width) * uniform(rng);
-      const float cy = static_cast<float>(lb.pad_top_px) + static_cast<float>(lb.scaled_size.height) * uniform(rng);
-      Det d{cx, cy, 6 + 40 * uniform(rng), 6 + 40 * uniform(rng), i, 0.5f + 0.1f * static_cast<float>(i)};
-      for (float& w : d.coefficients) w = normal(rng);
-      dets.push_back({2 * i + 1, d});
-    }
+    const auto [protos, dets] = random_decode_case(lb, rng);
     const auto out = cge::decode_yolov8_seg(predictions(7, dets), protos, lb, {});
     INFO("image " << image);
     REQUIRE(out.size() == 3);
@@ -355,26 +365,11 @@ TEST_CASE("decode_yolov8_seg retina: masks equal a naive pixel-by-pixel oracle",
   // scaling and padding on either side, boxes that may cross the image border.
   const cv::Size images[] = {{100, 60}, {60, 100}, {64, 64}, {37, 91}};
   std::mt19937 rng(20250708);
-  std::normal_distribution<float> normal(0.f, 1.f);
-  std::uniform_real_distribution<float> uniform(0.f, 1.f);
   cge::Yolov8Settings retina;
   retina.mask_decoding = cge::Yolov8MaskDecoding::retina;
   for (const cv::Size image : images) {
     const cge::Letterbox lb = cge::make_letterbox(image, {64, 64});
-    cv::Mat protos = prototypes(16, 16);
-    for (int k = 0; k < cge::kYolov8MaskCoefficients; ++k) {
-      for (int r = 0; r < 16; ++r) {
-        for (int c = 0; c < 16; ++c) proto_at(protos, k, r, c) = 2 * normal(rng);
-      }
-    }
-    std::vector<std::pair<int, Det>> dets;
-    for (int i = 0; i < 3; ++i) {
-      const float cx = static_cast<float>(lb.pad_left_px) + static_cast<float>(lb.scaled_size.width) * uniform(rng);
-      const float cy = static_cast<float>(lb.pad_top_px) + static_cast<float>(lb.scaled_size.height) * uniform(rng);
-      Det d{cx, cy, 6 + 40 * uniform(rng), 6 + 40 * uniform(rng), i, 0.5f + 0.1f * static_cast<float>(i)};
-      for (float& w : d.coefficients) w = normal(rng);
-      dets.push_back({2 * i + 1, d});
-    }
+    const auto [protos, dets] = random_decode_case(lb, rng);
     const auto out = cge::decode_yolov8_seg(predictions(7, dets), protos, lb, retina);
     const auto cropped = cge::decode_yolov8_seg(predictions(7, dets), protos, lb, {});
     INFO("image " << image);
