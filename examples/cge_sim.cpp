@@ -17,6 +17,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <unistd.h>
@@ -58,6 +59,7 @@ struct Options {
   std::uint64_t seed = 0;
   std::string out;
   bool exact_masks = false;
+  bool no_depth_noise = false;
   std::string error_classes = "person";
   cge::sim::SegmentationErrorSettings errors;
   cge::sim::TumWriterSettings writer;
@@ -76,9 +78,12 @@ void check_preset(const std::string& name) {
   }
 }
 
-std::unique_ptr<cge::sim::FrameSource> open_preset(const std::string& name, int frames, std::uint64_t seed) {
+std::unique_ptr<cge::sim::FrameSource> open_preset(const std::string& name, int frames, std::uint64_t seed,
+                                                   bool depth_noise) {
   using Renderer = cge::sim::SequenceRenderer;
-  return std::make_unique<cge::sim::RendererFrameSource<Renderer>>(Renderer(cge::sim::make_preset(name, frames, seed)));
+  cge::sim::SequenceSpec spec = cge::sim::make_preset(name, frames, seed);
+  spec.render.depth.noise_enabled = depth_noise;
+  return std::make_unique<cge::sim::RendererFrameSource<Renderer>>(Renderer(std::move(spec)));
 }
 
 // ---- the rest ----------------------------------------------------------------------------------
@@ -151,7 +156,8 @@ int run(Options opt) {
   }
   cge::sim::validate(opt.errors);
   opt.writer.description = std::string(kProgram) + " --preset " + opt.preset + " --frames " +
-                           std::to_string(opt.frames) + " --seed " + std::to_string(opt.seed);
+                           std::to_string(opt.frames) + " --seed " + std::to_string(opt.seed) +
+                           (opt.no_depth_noise ? " --no-depth-noise" : "");
   check_preset(opt.preset);
   cge::sim::check_output_folder(opt.out, opt.writer.force);
 
@@ -159,7 +165,7 @@ int run(Options opt) {
   const auto elapsed_s = [&start] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  const std::unique_ptr<cge::sim::FrameSource> source = open_preset(opt.preset, opt.frames, opt.seed);
+  const std::unique_ptr<cge::sim::FrameSource> source = open_preset(opt.preset, opt.frames, opt.seed, !opt.no_depth_noise);
   const cge::sim::SegmentationErrorModel model(source->instances(), opt.seed, opt.errors);
   cge::sim::WriteProgress progress;
   if (::isatty(::fileno(stderr))) progress = [&](int done, int total) { progress_bar.draw(done, total, elapsed_s()); };
@@ -192,6 +198,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(cge::sim::kPngFast, 9))
       ->capture_default_str();
   app.add_flag("--exact-masks", opt.exact_masks, "segmentation/ equal to masks/ (no segmentation errors)");
+  app.add_flag("--no-depth-noise", opt.no_depth_noise,
+               "depth without the sensor's range noise (still quantised, with its holes and dropouts)");
   app.add_option("--mask-offset-px", opt.errors.boundary_offset_px,
                  "boundary shift of affected masks, pixels: > 0 dilates, < 0 erodes")
       ->capture_default_str();

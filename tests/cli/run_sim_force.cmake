@@ -3,7 +3,8 @@
 # 1. a run into a fresh folder succeeds;
 # 2. a run into a folder holding a user's file is refused without --force and leaves it alone;
 # 3. with --force it writes the sequence and the user's file is still there, unchanged;
-# 4. both runs wrote the same bytes in every file of the sequence.
+# 4. both runs wrote the same bytes in every file of the sequence;
+# 5. --no-depth-noise changes the depth images only (and says so in the text files' header).
 cmake_minimum_required(VERSION 3.16)
 
 foreach(var EXE WORK)
@@ -59,3 +60,31 @@ foreach(name IN LISTS written)
     message(FATAL_ERROR "${name} differs between two runs with the same arguments")
   endif()
 endforeach()
+
+# 5. Without the depth noise: the same colour images, other depth images, and a header that says so.
+run_sim(0 --out "${WORK}/no_noise" --no-depth-noise)
+file(GLOB depth_images RELATIVE "${WORK}/fresh" "${WORK}/fresh/depth/*.png")
+file(GLOB rgb_images RELATIVE "${WORK}/fresh" "${WORK}/fresh/rgb/*.png")
+foreach(name IN LISTS rgb_images)
+  file(SHA256 "${WORK}/fresh/${name}" a)
+  file(SHA256 "${WORK}/no_noise/${name}" b)
+  if(NOT a STREQUAL b)
+    message(FATAL_ERROR "--no-depth-noise changed the colour image ${name}")
+  endif()
+endforeach()
+set(depth_changed 0)
+foreach(name IN LISTS depth_images)
+  file(SHA256 "${WORK}/fresh/${name}" a)
+  file(SHA256 "${WORK}/no_noise/${name}" b)
+  if(NOT a STREQUAL b)
+    math(EXPR depth_changed "${depth_changed} + 1")
+  endif()
+endforeach()
+list(LENGTH depth_images depth_count)
+if(NOT depth_changed EQUAL depth_count OR depth_count EQUAL 0)
+  message(FATAL_ERROR "--no-depth-noise changed ${depth_changed} of ${depth_count} depth images, expected all")
+endif()
+file(READ "${WORK}/no_noise/depth.txt" header)
+if(NOT header MATCHES "--no-depth-noise")
+  message(FATAL_ERROR "depth.txt does not record --no-depth-noise:\n${header}")
+endif()
