@@ -231,17 +231,9 @@ int main(int argc, char** argv) {
       },
       "print the preset names and exit");
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::Success& e) {
-    return app.exit(e);
-  } catch (const CLI::RuntimeError& e) {
-    return e.get_exit_code();
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    std::fprintf(stderr, "%s: error: %s\nRun with --help for more information.\n", kProgram, e.what());
-    return kExitUsage;
-  }
+  // CLI::Success from --list-presets is a parse "error" with exit code 0: parse_command_line
+  // returns 0 for it.
+  if (const int code = cge_tool::parse_command_line(app, argc, argv, kProgram); code >= 0) return code;
 
   return cge_tool::run_reporting_errors(kProgram, &progress_bar, [&] { return run(opt); });
 }
