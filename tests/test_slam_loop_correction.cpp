@@ -1,6 +1,7 @@
 // System-level test of loop correction: a short rendered loop (two laps of loop_dynamic), the
 // System with a LoopCloser; an accepted loop must join the right places and its correction must
-// bring the keyframes closer to the ground-truth poses. Oracle: the renderer's poses.
+// bring the keyframes closer to the ground-truth poses. Oracle: the renderer's poses. An
+// invariant of the correction is checked too: a point seen by one keyframe moves with it.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -74,9 +75,26 @@ TEST_CASE("System with a loop closer: an accepted loop is corrected and the keyf
   std::set<std::pair<long long, long long>> true_loops;
   for (const auto& l : renderer.loops()) true_loops.emplace(l.query_frame, l.match_frame);
   std::vector<Eigen::Isometry3d> before, after, truth;
+  // Map points seen by exactly one keyframe: their position in that keyframe's camera frame.
+  struct SingleView {
+    int keyframe = -1;
+    Eigen::Vector3d p_camera;
+  };
+  const auto single_view_points = [&system] {
+    std::map<std::int64_t, SingleView> out;
+    for (const cge::slam::MapPoint& p : system.map().map_points()) {
+      if (p.observations.size() != 1) continue;
+      const int k = p.observations.front().keyframe_id;
+      out[p.id] = {k, system.map().keyframe(k).T_world_camera.inverse() * p.position_world};
+    }
+    return out;
+  };
+  double worst_single_view_shift_m = 0;
+  int single_view_checked = 0;
   for (const cge::sim::RenderedFrame& f : frames) {
     std::vector<Eigen::Isometry3d> poses;
     for (const cge::slam::Keyframe& kf : system.map().keyframes()) poses.push_back(kf.T_world_camera);
+    const std::map<std::int64_t, SingleView> single_before = single_view_points();
     const int corrections = system.loop_corrections();
     cge::slam::FrameInput input;
     input.index = f.index;
@@ -84,6 +102,16 @@ TEST_CASE("System with a loop closer: an accepted loop is corrected and the keyf
     input.bgr = f.rgb;
     input.depth = f.depth;
     system.process(input, cge::slam::instances_from_label_image(f.instance_labels, classes, {cge::kCocoPerson}));
+    if (system.loop_corrections() > corrections) {
+      // The global BA moves keyframes but not the points it leaves out (those seen once): such a
+      // point must follow its keyframe, or it sits off it by the BA's move.
+      for (const auto& [id, now] : single_view_points()) {
+        const auto was = single_before.find(id);
+        if (was == single_before.end() || was->second.keyframe != now.keyframe) continue;
+        worst_single_view_shift_m = std::max(worst_single_view_shift_m, (now.p_camera - was->second.p_camera).norm());
+        ++single_view_checked;
+      }
+    }
     if (corrections == 0 && system.loop_corrections() == 1) {
       before = poses;
       for (std::size_t k = 0; k < poses.size(); ++k) {
@@ -112,6 +140,11 @@ TEST_CASE("System with a loop closer: an accepted loop is corrected and the keyf
   CHECK(accepted >= 1);
   REQUIRE(system.loop_corrections() >= 1);
   REQUIRE(!before.empty());
+
+  INFO("single-view points checked across the corrections: " << single_view_checked);
+  CHECK(single_view_checked > 100);
+  CHECK(worst_single_view_shift_m < 1e-9);
+
 
   // The correction moved the keyframes towards ground truth: the keyframes before the loop's query
   // (the ones that existed before the correction; the query was inserted by the correcting frame).

@@ -351,6 +351,15 @@ void System::correct_loop(int query_keyframe) {
     if (!points.empty()) {
       const BundleAdjustmentResult ba =
           BundleAdjuster{lc.bundle}.adjust(intrinsics_, graph.T_world_camera, points, observations, {0});
+      // A point seen by one keyframe took no part: it follows that keyframe's move in the BA, as
+      // in ORB-SLAM2, or it would sit where the pose graph put it, off its own keyframe's new
+      // pose (the newest keyframes, whose points mostly have one observation, moved most).
+      for (const MapPoint& p : map_.map_points()) {
+        if (p.observations.size() != 1) continue;
+        const auto k = static_cast<std::size_t>(p.observations.front().keyframe_id);
+        map_.set_map_point_position(
+            p.id, ba.T_world_camera[k] * (graph.T_world_camera[k].inverse() * p.position_world));
+      }
       for (int k = 0; k < n; ++k) map_.set_keyframe_pose(k, ba.T_world_camera[static_cast<std::size_t>(k)]);
       for (std::size_t i = 0; i < point_ids.size(); ++i)
         map_.set_map_point_position(point_ids[i], ba.points_world_m[i]);
