@@ -1,7 +1,8 @@
 // System-level test of loop correction: a short rendered loop (two laps of loop_dynamic), the
 // System with a LoopCloser; an accepted loop must join the right places and its correction must
-// bring the keyframes closer to the ground-truth poses. Oracle: the renderer's poses. An
-// invariant of the correction is checked too: a point seen by one keyframe moves with it.
+// bring the keyframes closer to the ground-truth poses. Oracle: the renderer's poses. Two
+// invariants of the correction are checked too: a point seen by one keyframe moves with it, and
+// a keyframe's frame stays on its keyframe in the trajectory.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -145,6 +146,16 @@ TEST_CASE("System with a loop closer: an accepted loop is corrected and the keyf
   CHECK(single_view_checked > 100);
   CHECK(worst_single_view_shift_m < 1e-9);
 
+  // A keyframe's own frame is reported at its keyframe's pose, after every correction (its pose is
+  // kept relative to the keyframe as inserted, not as the correction left it).
+  double worst_keyframe_frame_gap_m = 0;
+  for (const cge::slam::FrameRecord& r : system.frames()) {
+    if (r.keyframe_id < 0) continue;
+    const Eigen::Isometry3d reported = system.pose_of(r);
+    const Eigen::Isometry3d& keyframe = system.map().keyframe(r.keyframe_id).T_world_camera;
+    worst_keyframe_frame_gap_m = std::max(worst_keyframe_frame_gap_m, (reported.translation() - keyframe.translation()).norm());
+  }
+  CHECK(worst_keyframe_frame_gap_m < 1e-9);
 
   // The correction moved the keyframes towards ground truth: the keyframes before the loop's query
   // (the ones that existed before the correction; the query was inserted by the correcting frame).

@@ -150,13 +150,16 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
   const std::size_t index = records_.size() - 1;
 
   t = Clock::now();
+  current_record_ = index;
   if (track.has_pose()) decide_keyframe(frame, track, index);
+  current_record_ = kNoRecord;
   // Keyframe time excludes the local mapping, loop closing and optimisation it triggered (timed on
   // their own).
   FrameRecord& r = records_[index];
-  if (r.has_pose() && tracker_.reference_keyframe() >= 0) {
-    r.reference_keyframe = tracker_.reference_keyframe();
-    r.T_reference_camera = map_.keyframe(r.reference_keyframe).T_world_camera.inverse() * r.T_world_camera;
+  // With no keyframe inserted, nothing has moved the reference since tracking. (An insertion has
+  // set the relation already, before its local BA and loop correction: see insert_keyframe.)
+  if (r.has_pose() && r.reference_keyframe < 0 && tracker_.reference_keyframe() >= 0) {
+    keep_relative_to(index, tracker_.reference_keyframe());
   }
   time_of(r, Stage::keyframe) = elapsed_ms(t) - time_of(r, Stage::local_mapping) - time_of(r, Stage::loop_closing) -
                                 time_of(r, Stage::optimisation);
@@ -254,8 +257,21 @@ int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::s
   FrameRecord& r = records_[record];
   r.keyframe_id = id;
   r.keyframe_rule = rule;
+  // The poses of the keyframe's frame and of the frame being processed, against the keyframe's
+  // pose as inserted: both were tracked in the map as it is before the local BA and a loop
+  // correction move the keyframe (taken after them, a correction's whole shift would end up in the
+  // relative pose, and the frame would not follow it).
+  keep_relative_to(record, id);
+  if (current_record_ != kNoRecord && current_record_ != record) keep_relative_to(current_record_, id);
   after_keyframe_inserted(id);
   return id;
+}
+
+void System::keep_relative_to(std::size_t record, int keyframe_id) {
+  FrameRecord& r = records_[record];
+  if (!r.has_pose()) return;
+  r.reference_keyframe = keyframe_id;
+  r.T_reference_camera = map_.keyframe(keyframe_id).T_world_camera.inverse() * r.T_world_camera;
 }
 
 void System::after_keyframe_inserted(int keyframe_id) {

@@ -138,6 +138,9 @@ class System {
   int loop_corrections() const { return corrections_; }
   /// The current pose estimate of a frame: its reference keyframe's current pose times the
   /// relative pose at tracking time (so optimisation of keyframes moves the whole trajectory).
+  /// The relative pose is taken against the keyframe's pose as the tracker saw it, before the
+  /// local BA and loop correction that the frame's keyframe decision may trigger; a keyframe's
+  /// own frame is its keyframe (identity).
   Eigen::Isometry3d pose_of(const FrameRecord& record) const;
 
  private:
@@ -153,6 +156,8 @@ class System {
   /// The loop closer appends its decision to loops_ and corrects poses through map_; timed as the
   /// loop_closing and optimisation stages of the current frame.
   void after_keyframe_inserted(int keyframe_id);
+  /// Keeps record's pose relative to keyframe_id's pose as it is now (see pose_of).
+  void keep_relative_to(std::size_t record, int keyframe_id);
   /// Pose graph over all keyframes (with every accepted loop edge so far), map points moved with
   /// their first keyframe, then global BA (settings.loop_correction).
   void correct_loop(int query_keyframe);
@@ -175,6 +180,8 @@ class System {
   std::vector<LoopEdge> loop_edges_;  ///< every accepted loop, for all later pose graphs
   int last_correction_keyframe_ = -1;
   int corrections_ = 0;
+  static constexpr std::size_t kNoRecord = static_cast<std::size_t>(-1);
+  std::size_t current_record_ = kNoRecord;  ///< the record of the frame process() is handling
 };
 
 }  // namespace slam
