@@ -196,9 +196,9 @@ TEST_CASE("PoseRefiner rejects invalid input with a message naming it", "[ceres]
     bad.robust_rounds = 5;
     CHECK_THROWS_WITH(PoseRefiner(bad).refine(s.K, s.observations, s.T_world_camera), Catch::Contains("robust_rounds"));
     bad = {};
-    bad.chi2_threshold = nan;
+    bad.chi2_threshold_2dof = nan;
     CHECK_THROWS_WITH(PoseRefiner(bad).refine(s.K, s.observations, s.T_world_camera),
-                      Catch::Contains("chi2_threshold"));
+                      Catch::Contains("chi2_threshold_2dof"));
     bad = {};
     bad.solver.max_iterations = 0;
     CHECK_THROWS_WITH(PoseRefiner(bad).refine(s.K, s.observations, s.T_world_camera),

@@ -353,7 +353,7 @@ bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::
     const Eigen::Vector2d r =
         intrinsics_.project(p_camera) - Eigen::Vector2d(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
     const double sigma = keypoint_sigma_px(frame.keypoints[i], orb_scale_factor_);
-    if (r.squaredNorm() / (sigma * sigma) > settings_.refinement.chi2_threshold) continue;
+    if (r.squaredNorm() / (sigma * sigma) > settings_.refinement.chi2_threshold_2dof) continue;
     out.map_point_ids[i] = matches[i];
     ++out.inliers;
   }

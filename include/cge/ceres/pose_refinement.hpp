@@ -5,7 +5,7 @@
 //   - each observation's residual is whitened by its sigma_px (e.g. 1.2^octave for ORB), so the
 //     squared residual is a chi-square statistic with 2 dof;
 //   - `rounds` solves from the current pose; after each, every observation (outliers included, so
-//     one can come back) is re-classified: outlier when chi2 > chi2_threshold or the point is not in
+//     one can come back) is re-classified: outlier when chi2 > chi2_threshold_2dof or the point is not in
 //     front of the camera; outliers are left out of the next round;
 //   - the first `robust_rounds` rounds use a Huber loss of width huber_delta (in sigma units, i.e.
 //     huber_delta * sigma_px pixels), the later ones plain least squares on the inliers;
@@ -75,7 +75,7 @@ struct PoseRefinementSettings {
   /// Huber width on the whitened residual norm, sigma units (ORB-SLAM2: sqrt(5.991)), > 0.
   double huber_delta = 2.4477;
   /// An observation is an outlier when its chi2 (2 dof) exceeds this (95 %: 5.991), > 0.
-  double chi2_threshold = 5.991;
+  double chi2_threshold_2dof = 5.991;
   /// The same for an observation with depth (pixel + depth, 3 dof; 95 %: 7.815), > 0.
   double chi2_threshold_3dof = 7.815;
   /// Fewer valid observations than this: refine() throws (ORB-SLAM2: 3), >= 3.
@@ -93,7 +93,8 @@ struct PoseRefinementSettings {
     if (rounds < 1) fail("rounds must be at least 1");
     if (robust_rounds < 0 || robust_rounds > rounds) fail("robust_rounds must be in [0, rounds]");
     if (!(std::isfinite(huber_delta) && huber_delta > 0)) fail("huber_delta must be finite and positive");
-    if (!(std::isfinite(chi2_threshold) && chi2_threshold > 0)) fail("chi2_threshold must be finite and positive");
+    if (!(std::isfinite(chi2_threshold_2dof) && chi2_threshold_2dof > 0))
+      fail("chi2_threshold_2dof must be finite and positive");
     if (!(std::isfinite(chi2_threshold_3dof) && chi2_threshold_3dof > 0))
       fail("chi2_threshold_3dof must be finite and positive");
     if (min_observations < 3) fail("min_observations must be at least 3");
@@ -213,7 +214,7 @@ class PoseRefiner {
   }
 
   /// Sets inliers / inlier_count at T_camera_world: in front of the camera and, when use_chi2,
-  /// chi2 <= chi2_threshold.
+  /// chi2 <= chi2_threshold_2dof.
   void classify(const PinholeIntrinsics<double>& K, const std::vector<PoseObservation>& observations,
                 const Eigen::Isometry3d& T_camera_world, bool use_chi2, PoseRefinementResult& result) const {
     result.inlier_count = 0;
@@ -222,7 +223,7 @@ class PoseRefiner {
       bool in_front = false;
       double chi2 =
           reprojection_chi2(K, T_camera_world, o.point_world_m, o.pixel_px, o.sigma_px, settings.min_depth_m, in_front);
-      double threshold = settings.chi2_threshold;
+      double threshold = settings.chi2_threshold_2dof;
       if (!std::isnan(o.depth_m)) {
         const double e = ((T_camera_world * o.point_world_m).z() - o.depth_m) / o.sigma_depth_m;
         chi2 += e * e;
