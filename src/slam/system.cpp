@@ -150,9 +150,7 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
   const std::size_t index = records_.size() - 1;
 
   t = Clock::now();
-  current_record_ = index;
   if (track.has_pose()) decide_keyframe(frame, track, index);
-  current_record_ = kNoRecord;
   // Keyframe time excludes the local mapping, loop closing and optimisation it triggered (timed on
   // their own).
   FrameRecord& r = records_[index];
@@ -204,8 +202,9 @@ void System::apply_decision(const KeyframeDecision<double>& decision, Frame* cur
                             std::size_t record) {
   if (decision.inserts_keyframe()) {
     const char* rule = to_string(decision.rule);
+    const std::size_t current_record = current != nullptr ? record : kNoRecord;
     if (current != nullptr && decision.keyframe_id == current->index) {
-      insert_keyframe(*current, *track, record, rule);
+      insert_keyframe(*current, *track, record, rule, current_record);
     } else {
       const auto it = std::find_if(pending_.begin(), pending_.end(),
                                    [&](const Pending& p) { return p.frame.index == decision.keyframe_id; });
@@ -213,7 +212,7 @@ void System::apply_decision(const KeyframeDecision<double>& decision, Frame* cur
         throw std::logic_error("System: the keyframe policy chose frame " + std::to_string(decision.keyframe_id) +
                                ", which is not pending");
       }
-      insert_keyframe(it->frame, it->track, it->record, rule);
+      insert_keyframe(it->frame, it->track, it->record, rule, current_record);
     }
   }
   const std::vector<std::int64_t> keep = keyframe_policy_.pending_ids();
@@ -225,7 +224,8 @@ void System::apply_decision(const KeyframeDecision<double>& decision, Frame* cur
   if (current != nullptr && decision.keep_current) pending_.push_back(Pending{*current, *track, record});
 }
 
-int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::size_t record, const char* rule) {
+int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::size_t record, const char* rule,
+                            std::size_t current_record) {
   Keyframe kf;
   kf.frame_index = frame.index;
   kf.timestamp_s = frame.timestamp_s;
@@ -262,7 +262,7 @@ int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::s
   // correction move the keyframe (taken after them, a correction's whole shift would end up in the
   // relative pose, and the frame would not follow it).
   keep_relative_to(record, id);
-  if (current_record_ != kNoRecord && current_record_ != record) keep_relative_to(current_record_, id);
+  if (current_record != kNoRecord && current_record != record) keep_relative_to(current_record, id);
   after_keyframe_inserted(id);
   return id;
 }
@@ -340,11 +340,15 @@ void System::correct_loop(int query_keyframe) {
   for (const LoopEdge& e : loop_edges_) add_edge(e.match, e.query, e.T_match_query);
   const PoseGraphResult graph = PoseGraphOptimiser{lc.pose_graph}.optimise(before, edges, {0});
 
+  // A point moves rigidly with its first keyframe, from pose `from` to pose `to`.
+  const auto move_with_first_keyframe = [this](const MapPoint& p, const std::vector<Eigen::Isometry3d>& from,
+                                               const std::vector<Eigen::Isometry3d>& to) {
+    const auto k = static_cast<std::size_t>(p.observations.front().keyframe_id);
+    map_.set_map_point_position(p.id, to[k] * (from[k].inverse() * p.position_world));
+  };
   // Map points follow their first keyframe's correction.
   for (const MapPoint& p : map_.map_points()) {
-    if (p.observations.empty()) continue;
-    const auto k = static_cast<std::size_t>(p.observations.front().keyframe_id);
-    map_.set_map_point_position(p.id, graph.T_world_camera[k] * (before[k].inverse() * p.position_world));
+    if (!p.observations.empty()) move_with_first_keyframe(p, before, graph.T_world_camera);
   }
   for (int k = 0; k < n; ++k) map_.set_keyframe_pose(k, graph.T_world_camera[static_cast<std::size_t>(k)]);
 
@@ -371,10 +375,7 @@ void System::correct_loop(int query_keyframe) {
       // in ORB-SLAM2, or it would sit where the pose graph put it, off its own keyframe's new
       // pose (the newest keyframes, whose points mostly have one observation, moved most).
       for (const MapPoint& p : map_.map_points()) {
-        if (p.observations.size() != 1) continue;
-        const auto k = static_cast<std::size_t>(p.observations.front().keyframe_id);
-        map_.set_map_point_position(
-            p.id, ba.T_world_camera[k] * (graph.T_world_camera[k].inverse() * p.position_world));
+        if (p.observations.size() == 1) move_with_first_keyframe(p, graph.T_world_camera, ba.T_world_camera);
       }
       for (int k = 0; k < n; ++k) map_.set_keyframe_pose(k, ba.T_world_camera[static_cast<std::size_t>(k)]);
       for (std::size_t i = 0; i < point_ids.size(); ++i)

@@ -151,11 +151,15 @@ class System {
   };
   void decide_keyframe(Frame& frame, TrackResult& track, std::size_t record);
   void apply_decision(const KeyframeDecision<double>& decision, Frame* current, TrackResult* track, std::size_t record);
-  int insert_keyframe(const Frame& frame, const TrackResult& track, std::size_t record, const char* rule);
+  /// `record` is the keyframe's frame; `current_record` the frame being processed (kNoRecord when
+  /// none is, as in finish()).
+  int insert_keyframe(const Frame& frame, const TrackResult& track, std::size_t record, const char* rule,
+                      std::size_t current_record);
   /// After a keyframe is in the map: loop closing (section 7) and the optimisation it triggers.
   /// The loop closer appends its decision to loops_ and corrects poses through map_; timed as the
   /// loop_closing and optimisation stages of the current frame.
   void after_keyframe_inserted(int keyframe_id);
+  static constexpr std::size_t kNoRecord = static_cast<std::size_t>(-1);
   /// Keeps record's pose relative to keyframe_id's pose as it is now (see pose_of).
   void keep_relative_to(std::size_t record, int keyframe_id);
   /// Pose graph over all keyframes (with every accepted loop edge so far), map points moved with
@@ -180,8 +184,6 @@ class System {
   std::vector<LoopEdge> loop_edges_;  ///< every accepted loop, for all later pose graphs
   int last_correction_keyframe_ = -1;
   int corrections_ = 0;
-  static constexpr std::size_t kNoRecord = static_cast<std::size_t>(-1);
-  std::size_t current_record_ = kNoRecord;  ///< the record of the frame process() is handling
 };
 
 }  // namespace slam
