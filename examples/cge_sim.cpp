@@ -165,7 +165,8 @@ int run(Options opt) {
   const auto elapsed_s = [&start] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  const std::unique_ptr<cge::sim::FrameSource> source = open_preset(opt.preset, opt.frames, opt.seed, !opt.no_depth_noise);
+  const std::unique_ptr<cge::sim::FrameSource> source =
+      open_preset(opt.preset, opt.frames, opt.seed, !opt.no_depth_noise);
   const cge::sim::SegmentationErrorModel model(source->instances(), opt.seed, opt.errors);
   cge::sim::WriteProgress progress;
   if (::isatty(::fileno(stderr))) progress = [&](int done, int total) { progress_bar.draw(done, total, elapsed_s()); };

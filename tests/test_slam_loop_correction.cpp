@@ -153,7 +153,8 @@ TEST_CASE("System with a loop closer: an accepted loop is corrected and the keyf
     if (r.keyframe_id < 0) continue;
     const Eigen::Isometry3d reported = system.pose_of(r);
     const Eigen::Isometry3d& keyframe = system.map().keyframe(r.keyframe_id).T_world_camera;
-    worst_keyframe_frame_gap_m = std::max(worst_keyframe_frame_gap_m, (reported.translation() - keyframe.translation()).norm());
+    worst_keyframe_frame_gap_m =
+        std::max(worst_keyframe_frame_gap_m, (reported.translation() - keyframe.translation()).norm());
   }
   CHECK(worst_keyframe_frame_gap_m < 1e-9);
 
