@@ -22,8 +22,10 @@
 #include "cge/entropy/degree_degree_entropy.hpp"
 #include "cge/entropy/exponent_scaling.hpp"
 #include "cge/entropy/shortest_path_degree_sums.hpp"
+#include "cge/entropy/single_source_degree_sums.hpp"
 #include "cge/entropy/softmax_entropy.hpp"
 #include "cge/graph/graph.hpp"
+#include "cge/graph/hop_diameter.hpp"
 #include "cge/graph/graph_builder.hpp"
 #include "test_support.hpp"
 
@@ -1313,4 +1315,294 @@ TEST_CASE("degree sum kernels: availability and an explicit request that cannot 
   }
   CHECK_THROWS_AS(cge::shortest_path_degree_sums(cge::Graph<double>{}, TieMode::all, cge::DegreeSumKernel::portable),
                   std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------------------------
+// compute_index(): the entropy without the per-node exponents, and its parts
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+/// Eccentricities by one plain BFS per node (-1 distances ignored) and the component count.
+std::pair<int, int> brute_diameter_and_components(const SmallGraph& sg) {
+  const cge::Graph<double> g = to_graph(sg);
+  int diameter = 0;
+  std::vector<int> component(static_cast<std::size_t>(sg.n), -1);
+  int components = 0;
+  for (int s = 0; s < sg.n; ++s) {
+    std::vector<int> dist(static_cast<std::size_t>(sg.n), -1);
+    std::vector<int> queue{s};
+    dist[static_cast<std::size_t>(s)] = 0;
+    for (std::size_t h = 0; h < queue.size(); ++h) {
+      for (const int w : g.neighbors(queue[h])) {
+        if (dist[static_cast<std::size_t>(w)] < 0) {
+          dist[static_cast<std::size_t>(w)] = dist[static_cast<std::size_t>(queue[h])] + 1;
+          queue.push_back(w);
+        }
+      }
+    }
+    for (const int d : dist) diameter = std::max(diameter, d);
+    if (component[static_cast<std::size_t>(s)] < 0) {
+      for (const int w : queue) component[static_cast<std::size_t>(w)] = components;
+      ++components;
+    }
+  }
+  return {diameter, components};
+}
+
+/// The table SingleSourceDegreeSums gives when never stopped, source by source.
+template <TieMode Mode>
+cge::DegreeSumTable single_source_table(const cge::Graph<double>& g) {
+  cge::DegreeSumTable t;
+  t.num_nodes = g.num_nodes();
+  t.row_offsets.assign(static_cast<std::size_t>(g.num_nodes()) + 1, 0);
+  cge::detail::SingleSourceDegreeSums<Mode, double> sums(g);
+  for (std::int32_t s = 0; s < g.num_nodes(); ++s) {
+    std::int32_t expected_level = 1;
+    const std::int32_t ecc = sums.run(s, [&](std::int32_t k, double delta) {
+      REQUIRE(k == expected_level++);
+      t.values.push_back(delta);
+      return true;
+    });
+    REQUIRE(ecc == expected_level - 1);
+    t.row_offsets[static_cast<std::size_t>(s) + 1] = static_cast<std::int64_t>(t.values.size());
+    t.diameter = std::max(t.diameter, ecc);
+  }
+  t.connected = cge::hop_diameter(g).components <= 1;
+  return t;
+}
+
+cge::DegreeSumTable single_source_table(const cge::Graph<double>& g, TieMode mode) {
+  switch (mode) {
+    case TieMode::all:
+      return single_source_table<TieMode::all>(g);
+    case TieMode::mean:
+      return single_source_table<TieMode::mean>(g);
+    case TieMode::min:
+      break;
+  }
+  return single_source_table<TieMode::min>(g);
+}
+
+/// The entropy of the nodes whose log weight is within g of the heaviest, from full exponents
+/// (the definition compute_index() implements), in ascending node order.
+double entropy_of_heavy_nodes(const std::vector<double>& exponents, double alpha, double g) {
+  const double log_alpha = std::log(alpha);
+  double top = -std::numeric_limits<double>::infinity();
+  for (const double e : exponents) top = std::max(top, e * log_alpha);
+  std::vector<double> kept;
+  for (const double e : exponents) {
+    if (e * log_alpha - top >= -g) kept.push_back(e * log_alpha);
+  }
+  return cge::softmax_entropy_bits(kept);
+}
+
+}  // namespace
+
+TEST_CASE("hop_diameter equals the largest BFS eccentricity, with the component count", "[dde][diameter]") {
+  std::vector<SmallGraph> graphs = small_graph_zoo(300);
+  std::mt19937 rng(4242);
+  graphs.push_back(geometric_graph(300, 3));
+  graphs.push_back(geometric_graph(600, 4));
+  graphs.push_back(grid_graph(15, 23));
+  graphs.push_back(decorated_grid(12, 12, true));
+  graphs.push_back(diamond_chain(3, 40));
+  graphs.push_back(star_of_cliques(5, 6));
+  for (int i = 0; i < 40; ++i) {
+    const int n = std::uniform_int_distribution<int>(2, 200)(rng);
+    graphs.push_back(random_gnp(rng, n, std::uniform_real_distribution<double>(0.005, 0.1)(rng), "d" + std::to_string(i)));
+    graphs.push_back(random_connected(rng, n, std::uniform_int_distribution<int>(0, n)(rng), "c" + std::to_string(i)));
+  }
+  for (const SmallGraph& sg : graphs) {
+    INFO(sg.name << " (" << sg.n << " nodes)");
+    const auto [diameter, components] = brute_diameter_and_components(sg);
+    const cge::HopDiameter d = cge::hop_diameter(to_graph(sg));
+    REQUIRE(d.diameter == diameter);
+    REQUIRE(d.components == components);
+    CHECK(d.searches <= sg.n);
+  }
+  const cge::HopDiameter empty = cge::hop_diameter(cge::Graph<double>{});
+  CHECK(empty.diameter == 0);
+  CHECK(empty.components == 0);
+  // Few searches where the bounds work: a long path needs only its two ends and a middle node.
+  CHECK(cge::hop_diameter(to_graph(path_graph(500))).searches <= 3);
+}
+
+TEST_CASE("SingleSourceDegreeSums: bit for bit the ordered reference, and stops when asked", "[dde][kernel]") {
+  std::mt19937 rng(31337);
+  std::vector<SmallGraph> graphs = small_graph_zoo(60);
+  graphs.push_back(geometric_graph(300, 11));
+  graphs.push_back(with_random_chords(rng, grid_graph(12, 15), 12));
+  graphs.push_back(star_of_cliques(6, 9));
+  graphs.push_back(diamond_chain(6, 120));  // products and sums that round
+  graphs.push_back(diamond_chain(8, 345));  // TieMode::mean rescales, TieMode::all overflows
+  graphs.push_back(decorated_grid(20, 20, true));
+  for (const SmallGraph& sg : graphs) {
+    const cge::Graph<double> g = to_graph(sg);
+    for (const TieMode mode : kTieModes) {
+      INFO(sg.name << " (" << sg.n << " nodes), ties " << tie_name(mode));
+      REQUIRE(same_bits(single_source_table(g, mode), ordered_reference(sg, mode)));
+    }
+  }
+  // A run stopped after level 2 makes no further call, returns 2, and leaves the next run intact.
+  const SmallGraph sg = grid_graph(6, 7);
+  const cge::Graph<double> g = to_graph(sg);
+  cge::detail::SingleSourceDegreeSums<TieMode::all, double> sums(g);
+  int calls = 0;
+  CHECK(sums.run(0, [&](std::int32_t k, double) {
+    ++calls;
+    return k < 2;
+  }) == 2);
+  CHECK(calls == 2);
+  CHECK(same_bits(single_source_table(g, TieMode::all), ordered_reference(sg, TieMode::all)));
+}
+
+TEST_CASE("compute_index agrees with compute on H, I, diameter and connectivity", "[dde][index]") {
+  std::vector<SmallGraph> graphs = small_graph_zoo(120);
+  std::mt19937 rng(777);
+  graphs.push_back(geometric_graph(400, 21));
+  graphs.push_back(geometric_graph(900, 22));
+  graphs.push_back(decorated_grid(15, 15, false));
+  graphs.push_back(star_of_cliques(4, 7));
+  graphs.push_back(disjoint_union(geometric_graph(200, 23), random_gnp(rng, 60, 0.03, "sparse")));
+  const cge::CoefficientKind kinds[] = {cge::CoefficientKind::exp, cge::CoefficientKind::linear,
+                                        cge::CoefficientKind::constant};
+  int pruned_graphs = 0;
+  for (const SmallGraph& sg : graphs) {
+    const cge::Graph<double> g = to_graph(sg);
+    if (g.num_nodes() == 0) continue;
+    for (const TieMode mode : kTieModes) {
+      for (const double alpha : {0.2, 0.5, 0.9, 0.99}) {
+        for (const cge::CoefficientKind kind : kinds) {
+          cge::DegreeDegreeSettings<double> s;
+          s.ties = mode;
+          s.alpha = alpha;
+          s.lambda = 1.5;
+          const cge::DegreeDegreeEntropy<double> dde(s, cge::StandardCoefficients{kind});
+          INFO(sg.name << " (" << sg.n << " nodes), ties " << tie_name(mode) << ", alpha " << alpha);
+          const auto full = dde.compute(g);
+          const auto index = dde.compute_index(g);
+          REQUIRE(index.diameter == full.diameter);
+          REQUIRE(index.connected == full.connected);
+          REQUIRE(index.max_entropy_bits == full.max_entropy_bits);
+          REQUIRE(index.entropy_bits == Approx(full.entropy_bits).margin(1e-12));
+          REQUIRE(index.information_index == Approx(full.information_index).margin(1e-12));
+          REQUIRE(dde.information_index(g) == index.information_index);
+          REQUIRE(index.exponents.empty());
+          REQUIRE(index.exponents_evaluated >= 1);
+          REQUIRE(index.exponents_evaluated <= g.num_nodes());
+          if (index.exponents_evaluated < g.num_nodes()) ++pruned_graphs;
+        }
+      }
+    }
+  }
+  CHECK(pruned_graphs > 100);  // the bounded search did leave nodes out
+}
+
+TEST_CASE("compute_index: exactly the entropy of the nodes within G of the heaviest, within the bound",
+          "[dde][index]") {
+  // With a small G many nodes sit near the cut, so a wrong cut or a lost node shows.
+  std::vector<SmallGraph> graphs;
+  std::mt19937 rng(99);
+  for (int i = 0; i < 30; ++i) graphs.push_back(random_connected(rng, 40 + i, 20 + i, "r" + std::to_string(i)));
+  graphs.push_back(geometric_graph(300, 5));
+  graphs.push_back(decorated_grid(10, 12, true));
+  for (const SmallGraph& sg : graphs) {
+    const cge::Graph<double> g = to_graph(sg);
+    for (const TieMode mode : kTieModes) {
+      for (const double cut : {1.0, 3.0, 10.0}) {
+        for (const double alpha : {0.5, 0.95}) {
+          cge::DegreeDegreeSettings<double> s;
+          s.ties = mode;
+          s.alpha = alpha;
+          s.negligible_log_weight = cut;
+          const cge::DegreeDegreeEntropy<double> dde(s);
+          INFO(sg.name << ", ties " << tie_name(mode) << ", G " << cut << ", alpha " << alpha);
+          const auto full = dde.compute(g);
+          const auto index = dde.compute_index(g);
+          REQUIRE(index.entropy_bits == Approx(entropy_of_heavy_nodes(full.exponents, alpha, cut)).margin(1e-13));
+          // The documented bound on what leaving nodes out changes.
+          const double log_alpha = std::log(alpha);
+          double top = -std::numeric_limits<double>::infinity();
+          for (const double e : full.exponents) top = std::max(top, e * log_alpha);
+          int left_out = 0;
+          for (const double e : full.exponents) left_out += e * log_alpha - top < -cut;
+          const double n = static_cast<double>(g.num_nodes());
+          const double bound = left_out * std::exp(-cut) * (1.0 + cut + std::log(n)) / std::log(2.0);
+          REQUIRE(std::fabs(index.entropy_bits - full.entropy_bits) <= bound + 1e-12);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("compute_index falls back to every node where the bound does not apply", "[dde][index]") {
+  const cge::Graph<double> g = to_graph(geometric_graph(200, 8));
+  const auto same_as_compute = [&](const auto& dde) {
+    const auto full = dde.compute(g);
+    const auto index = dde.compute_index(g);
+    CHECK(index.entropy_bits == full.entropy_bits);
+    CHECK(index.information_index == full.information_index);
+    CHECK(index.diameter == full.diameter);
+    CHECK(index.exponents.empty());
+    CHECK(index.exponents_evaluated == g.num_nodes());
+  };
+  cge::DegreeDegreeSettings<double> s;
+  SECTION("alpha >= 1: the heavy nodes are those of large E") {
+    s.alpha = 1.0;
+    same_as_compute(cge::DegreeDegreeEntropy<double>(s));
+    s.alpha = 2.0;
+    same_as_compute(cge::DegreeDegreeEntropy<double>(s));
+  }
+  SECTION("exponents scaled by their mean need every exponent") {
+    cge::ExponentScaling scaling;
+    scaling.kind = cge::ScalingKind::normalised_mean;
+    same_as_compute(cge::DegreeDegreeEntropy<double>(s, cge::StandardCoefficients{}, scaling));
+  }
+  SECTION("a negative coefficient breaks the monotone partial sums") {
+    const auto coefficients = cge::custom_coefficients([](int k, int) { return k == 2 ? -0.5 : 1.0; });
+    same_as_compute(cge::DegreeDegreeEntropy<double, decltype(coefficients)>(s, coefficients));
+  }
+  SECTION("G = +infinity asks for every node") {
+    s.negligible_log_weight = std::numeric_limits<double>::infinity();
+    same_as_compute(cge::DegreeDegreeEntropy<double>(s));
+  }
+}
+
+TEST_CASE("compute_index: settings and input errors", "[dde][index][errors]") {
+  const cge::Graph<double> g = to_graph(path_graph(5));
+  for (const double bad : {0.5, 0.0, -3.0, std::numeric_limits<double>::quiet_NaN()}) {
+    cge::DegreeDegreeSettings<double> s;
+    s.negligible_log_weight = bad;
+    const std::string message =
+        cge_test::invalid_argument_message([&] { cge::DegreeDegreeEntropy<double>(s).compute_index(g); });
+    CHECK_THAT(message, Catch::Contains("negligible_log_weight"));
+    CHECK_THROWS_AS(cge::DegreeDegreeEntropy<double>(s).compute(g), std::invalid_argument);
+  }
+  CHECK_THROWS_AS(cge::DegreeDegreeEntropy<double>().compute_index(cge::Graph<double>{}), std::invalid_argument);
+  const auto one = cge::DegreeDegreeEntropy<double>().compute_index(cge::Graph<double>::from_edges(1, {}, false));
+  CHECK(one.entropy_bits == 0.0);
+  CHECK(one.information_index == 0.0);
+  CHECK(one.connected);
+  // Worked value through the bounded path: P5 at alpha 0.5.
+  CHECK(cge::DegreeDegreeEntropy<double>().compute_index(g).information_index ==
+        Approx(0.527454699858088).epsilon(1e-12));
+}
+
+TEST_CASE("compute_index on path counts beyond the range of double", "[dde][index][numerics]") {
+  // TieMode::all overflows on the chain's long paths. compute() reports it; compute_index() reports
+  // it too when a search it needs reaches an overflowing level, and never returns a non-finite value.
+  const cge::Graph<double> g = to_graph(diamond_chain(8, 345));
+  cge::DegreeDegreeSettings<double> s;
+  s.ties = TieMode::all;
+  const cge::DegreeDegreeEntropy<double> dde(s);
+  CHECK_THROWS_AS(dde.compute(g), std::overflow_error);
+  CHECK_THROWS_AS(dde.compute_index(g), std::overflow_error);
+  for (const TieMode mode : {TieMode::mean, TieMode::min}) {
+    s.ties = mode;
+    const auto full = cge::DegreeDegreeEntropy<double>(s).compute(g);
+    const auto index = cge::DegreeDegreeEntropy<double>(s).compute_index(g);
+    CHECK(std::isfinite(index.information_index));
+    CHECK(index.information_index == Approx(full.information_index).margin(1e-12));
+  }
 }

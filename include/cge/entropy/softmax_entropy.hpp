@@ -10,17 +10,20 @@
 
 namespace cge {
 
+/// What every degree-degree path reports when an exponent E(v) is not finite.
+[[noreturn]] inline void throw_exponent_not_finite() {
+  throw std::overflow_error(
+      "degree-degree entropy: an exponent is not finite (path multiplicities overflowed double); "
+      "use TieMode::mean or TieMode::min for this graph");
+}
+
 /// H = -sum p_i log2 p_i. Throws std::overflow_error when a log weight is not finite (an exponent
 /// that overflowed double upstream), std::invalid_argument for an empty input.
 inline double softmax_entropy_bits(const std::vector<double>& log_weights) {
   if (log_weights.empty()) throw std::invalid_argument("softmax_entropy_bits: no weights");
   double top = log_weights[0];
   for (double l : log_weights) {
-    if (!std::isfinite(l)) {
-      throw std::overflow_error(
-          "degree-degree entropy: an exponent is not finite (path multiplicities overflowed double); "
-          "use TieMode::mean or TieMode::min for this graph");
-    }
+    if (!std::isfinite(l)) throw_exponent_not_finite();
     top = std::max(top, l);
   }
   // With shifted logs s_i = l_i - top <= 0 and Z = sum e^{s_i} >= 1:
