@@ -11,7 +11,7 @@
 // gives H and I without the per-node exponents; for alpha < 1 with raw exponents and non-negative
 // coefficients it completes E(v) only for the nodes that carry weight (weight_bounded_entropy.hpp:
 // the nodes it leaves out weigh less than e^-100 of the heaviest, which moves H by under
-// |V| 2e-41 bits), typically a few percent of the work on frame-like graphs.
+// |V| 2e-41 bits): 3-4x faster at 1000 nodes, little on dense 300-node graphs (docs/BENCHMARK.md).
 // Deterministic: the result depends only on the graph's structure (not node numbering) and the
 // settings. Disconnected input: rho is the largest finite distance and unreachable pairs are
 // ignored (result.connected tells). Empty graph: throws.
