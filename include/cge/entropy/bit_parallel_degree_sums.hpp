@@ -53,20 +53,22 @@ std::vector<std::int32_t> local_source_order(const Graph<Scalar>& g) {
 }
 
 /// TieMode::mean needs only the ratio S / N, and every later level is linear in this one, so a
-/// lane whose path counts grow huge has its whole level scaled by kMeanRescaleFactor: exact (a
-/// power of two), and N never overflows however tie-rich the graph. TieMode::all needs the true
-/// sums and reports overflow instead. Returns the lanes of `active_lanes` whose largest count on
-/// this level, level_max_count[lane], passed 2^512. Every kernel rescales the same lanes.
+/// source whose path counts grow huge has its whole level scaled by mean_rescale_factor(): exact
+/// (a power of two), and N never overflows however tie-rich the graph. TieMode::all needs the true
+/// sums and reports overflow instead. The rule: a level is rescaled when its largest count passed
+/// 2^512. Every kernel, block or single-source, applies it through these functions.
+inline bool mean_level_needs_rescale(double level_max_count) { return level_max_count > std::ldexp(1.0, 512); }
+inline double mean_rescale_factor() { return std::ldexp(1.0, -512); }
+
+/// The lanes of `active_lanes` whose level needs rescaling (level_max_count[lane]: largest count).
 inline std::uint64_t lanes_to_rescale(std::uint64_t active_lanes, const double* level_max_count) {
-  const double threshold = std::ldexp(1.0, 512);
   std::uint64_t large = 0;
   for (std::uint64_t m = active_lanes; m; m &= m - 1) {
     const int i = lowest_bit(m);
-    if (level_max_count[i] > threshold) large |= std::uint64_t(1) << i;
+    if (mean_level_needs_rescale(level_max_count[i])) large |= std::uint64_t(1) << i;
   }
   return large;
 }
-inline double mean_rescale_factor() { return std::ldexp(1.0, -512); }
 
 /// Delta rows of up to 64 sources at once. Level-synchronous BFS with one bit per source:
 ///   reach_k[u] = (OR over neighbours p of reach_{k-1}[p]) & ~visited[u]

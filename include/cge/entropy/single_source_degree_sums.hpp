@@ -102,7 +102,7 @@ class SingleSourceDegreeSums {
         layer += Mode == TieMode::mean ? sum[u] / count[u] : sum[u];
         if (Mode == TieMode::mean) max_count = std::max(max_count, count[u]);
       }
-      if (Mode == TieMode::mean && max_count > std::ldexp(1.0, 512)) {
+      if (Mode == TieMode::mean && mean_level_needs_rescale(max_count)) {
         const double factor = mean_rescale_factor();
         for (std::size_t i = 0; i < next_size; ++i) {
           count[static_cast<std::size_t>(next[i])] *= factor;
