@@ -13,6 +13,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -26,6 +27,7 @@
 #include "cge/entropy/softmax_entropy.hpp"
 #include "cge/graph/graph.hpp"
 #include "cge/graph/hop_diameter.hpp"
+#include "cge/graph/twin_classes.hpp"
 #include "cge/graph/graph_builder.hpp"
 #include "test_support.hpp"
 
@@ -1397,6 +1399,50 @@ double entropy_of_heavy_nodes(const std::vector<double>& exponents, double alpha
   return cge::softmax_entropy_bits(kept);
 }
 
+/// Adds `count` twins of random nodes: each copies its original's neighbours, and is joined to the
+/// original (a true twin) or not (a false twin); then relabels at random so twins are scattered.
+SmallGraph with_planted_twins(std::mt19937& rng, const SmallGraph& base, int count) {
+  SmallGraph g = base;
+  g.name += "+twins";
+  if (base.n == 0) return g;
+  for (int i = 0; i < count; ++i) {
+    const int original = std::uniform_int_distribution<int>(0, g.n - 1)(rng);
+    const int twin = g.n++;
+    std::vector<std::pair<int, int>> added;
+    for (const auto& [u, v] : g.edges) {
+      if (u == original) added.push_back({twin, v});
+      if (v == original) added.push_back({u, twin});
+    }
+    if (std::uniform_int_distribution<int>(0, 1)(rng) == 1) added.push_back({original, twin});
+    g.edges.insert(g.edges.end(), added.begin(), added.end());
+  }
+  return relabel(g, random_permutation(rng, g.n));
+}
+
+/// The twin classes by definition: for every pair, compare the neighbour sets (open, and closed
+/// for adjacent pairs); a node's representative is the smallest node it shares either with.
+std::vector<std::int32_t> brute_twin_representatives(const SmallGraph& sg) {
+  std::vector<std::set<int>> open(static_cast<std::size_t>(sg.n));
+  for (const auto& [u, v] : sg.edges) {
+    open[static_cast<std::size_t>(u)].insert(v);
+    open[static_cast<std::size_t>(v)].insert(u);
+  }
+  std::vector<std::int32_t> representative(static_cast<std::size_t>(sg.n));
+  for (int v = 0; v < sg.n; ++v) {
+    representative[static_cast<std::size_t>(v)] = v;
+    for (int u = 0; u < v; ++u) {
+      std::set<int> closed_u = open[static_cast<std::size_t>(u)], closed_v = open[static_cast<std::size_t>(v)];
+      closed_u.insert(u);
+      closed_v.insert(v);
+      if (open[static_cast<std::size_t>(u)] == open[static_cast<std::size_t>(v)] || closed_u == closed_v) {
+        representative[static_cast<std::size_t>(v)] = u;
+        break;
+      }
+    }
+  }
+  return representative;
+}
+
 }  // namespace
 
 TEST_CASE("hop_diameter equals the largest BFS eccentricity, with the component count", "[dde][diameter]") {
@@ -1457,6 +1503,56 @@ TEST_CASE("SingleSourceDegreeSums: bit for bit the ordered reference, and stops 
   CHECK(same_bits(single_source_table(g, TieMode::all), ordered_reference(sg, TieMode::all)));
 }
 
+TEST_CASE("twin_classes: the nodes with equal open or closed neighbourhoods, by pairwise comparison",
+          "[dde][twins]") {
+  std::mt19937 rng(2718);
+  std::vector<SmallGraph> graphs = small_graph_zoo(150);
+  const std::size_t plain = graphs.size();
+  for (std::size_t i = 0; i < plain; ++i) {
+    graphs.push_back(with_planted_twins(rng, graphs[i], std::uniform_int_distribution<int>(1, 6)(rng)));
+  }
+  graphs.push_back(star_of_cliques(4, 7));
+  graphs.push_back(with_planted_twins(rng, geometric_graph(300, 17), 40));
+  int with_twins = 0;
+  for (const SmallGraph& sg : graphs) {
+    INFO(sg.name << " (" << sg.n << " nodes)");
+    const std::vector<std::int32_t> expected = brute_twin_representatives(sg);
+    const cge::TwinClasses twins = cge::twin_classes(to_graph(sg));
+    REQUIRE(twins.representative == expected);
+    std::int32_t classes = 0;
+    for (std::int32_t v = 0; v < sg.n; ++v) classes += expected[static_cast<std::size_t>(v)] == v;
+    REQUIRE(twins.num_classes == classes);
+    with_twins += classes < sg.n;
+  }
+  CHECK(with_twins > 150);  // the planted ones at least
+  CHECK(cge::twin_classes(cge::Graph<double>{}).num_classes == 0);
+}
+
+TEST_CASE("twins have the same exponent in every tie mode (the swap is an automorphism)", "[dde][twins]") {
+  std::mt19937 rng(1414);
+  std::vector<SmallGraph> graphs;
+  for (int i = 0; i < 40; ++i) {
+    graphs.push_back(with_planted_twins(rng, random_connected(rng, 20 + i, 10 + i, "t" + std::to_string(i)), 8));
+  }
+  graphs.push_back(with_planted_twins(rng, geometric_graph(400, 29), 60));
+  graphs.push_back(star_of_cliques(5, 6));
+  for (const SmallGraph& sg : graphs) {
+    const cge::Graph<double> g = to_graph(sg);
+    const cge::TwinClasses twins = cge::twin_classes(g);
+    for (const TieMode mode : kTieModes) {
+      INFO(sg.name << ", ties " << tie_name(mode));
+      cge::DegreeDegreeSettings<double> s;
+      s.ties = mode;
+      const auto full = cge::DegreeDegreeEntropy<double>(s).compute(g);
+      for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
+        const double mine = full.exponents[static_cast<std::size_t>(v)];
+        const double theirs = full.exponents[static_cast<std::size_t>(twins.representative[static_cast<std::size_t>(v)])];
+        REQUIRE(mine == Approx(theirs).epsilon(1e-12));
+      }
+    }
+  }
+}
+
 TEST_CASE("compute_index agrees with compute on H, I, diameter and connectivity", "[dde][index]") {
   std::vector<SmallGraph> graphs = small_graph_zoo(120);
   std::mt19937 rng(777);
@@ -1465,6 +1561,10 @@ TEST_CASE("compute_index agrees with compute on H, I, diameter and connectivity"
   graphs.push_back(decorated_grid(15, 15, false));
   graphs.push_back(star_of_cliques(4, 7));
   graphs.push_back(disjoint_union(geometric_graph(200, 23), random_gnp(rng, 60, 0.03, "sparse")));
+  for (int i = 0; i < 20; ++i) {  // twins: searched once per class
+    graphs.push_back(with_planted_twins(rng, random_connected(rng, 30 + i, 15, "tw" + std::to_string(i)), 10));
+  }
+  graphs.push_back(with_planted_twins(rng, geometric_graph(300, 24), 50));
   const cge::CoefficientKind kinds[] = {cge::CoefficientKind::exp, cge::CoefficientKind::linear,
                                         cge::CoefficientKind::constant};
   int pruned_graphs = 0;

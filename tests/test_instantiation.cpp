@@ -161,6 +161,10 @@ struct Run {
     REQUIRE(dde.compute(as_float).entropy_bits == S(1));
     REQUIRE(dde.from_table(cge::shortest_path_degree_sums(g, cge::TieMode::mean)).exponents.size() ==
             static_cast<std::size_t>(g.num_nodes()));
+    REQUIRE(cge::hop_diameter(g).diameter == result.diameter);
+    const cge::TwinClasses twins = cge::twin_classes(g);
+    REQUIRE(twins.num_classes >= 1);
+    REQUIRE(twins.num_classes <= g.num_nodes());
     const cge::DegreeDegreeEntropy<S, cge::CustomCoefficients<cge_test_instantiation::HalfPower>> half(
         cge::DegreeDegreeSettings<S>{}, cge::custom_coefficients(cge_test_instantiation::HalfPower{}));
     const cge::DegreeDegreeEntropy<S, cge::CustomCoefficients<cge_test_instantiation::CoefficientFunction>> inv(

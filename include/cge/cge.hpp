@@ -30,5 +30,7 @@
 #include "cge/frontend/pixel_box.hpp"
 #include "cge/graph/graph.hpp"
 #include "cge/graph/graph_builder.hpp"
+#include "cge/graph/hop_diameter.hpp"
 #include "cge/graph/neighbor_search.hpp"
+#include "cge/graph/twin_classes.hpp"
 #include "cge/io/graph_text.hpp"
