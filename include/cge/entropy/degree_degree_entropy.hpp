@@ -11,7 +11,8 @@
 // gives H and I without the per-node exponents; for alpha < 1 with raw exponents and non-negative
 // coefficients it completes E(v) only for the nodes that carry weight (weight_bounded_entropy.hpp:
 // the nodes it leaves out weigh less than e^-100 of the heaviest, which moves H by under
-// |V| 2e-41 bits): 3-4x faster at 1000 nodes, little on dense 300-node graphs (docs/BENCHMARK.md).
+// |V| 2e-41 bits; twins are searched once): 3-4x faster at 1000 nodes, little on dense 300-node
+// graphs (docs/BENCHMARK.md).
 // Deterministic: the result depends only on the graph's structure (not node numbering) and the
 // settings. Disconnected input: rho is the largest finite distance and unreachable pairs are
 // ignored (result.connected tells). Empty graph: throws.
@@ -53,7 +54,7 @@ struct DegreeDegreeResult {
   Scalar information_index = 0;   ///< I = lambda (log2 |V| - H)
   std::int32_t diameter = 0;      ///< rho, the largest finite hop distance
   bool connected = true;
-  std::int32_t exponents_evaluated = 0;  ///< nodes whose E(v) was computed in full (compute(): all)
+  std::int32_t exponents_evaluated = 0;  ///< nodes whose E(v) is known in full, twins included (compute(): all)
 };
 
 template <typename Scalar = double, typename Coefficients = StandardCoefficients, typename Scaling = ExponentScaling>
