@@ -114,15 +114,8 @@ class DegreeDegreeEntropy {
         bounded = detail::weight_bounded_entropy<TieMode::min>(g, c, log_alpha, negligible);
         break;
     }
-    const double h_max = std::log2(static_cast<double>(g.num_nodes()));
-    Result r;
-    r.entropy_bits = static_cast<Scalar>(bounded.entropy_bits);
-    r.max_entropy_bits = static_cast<Scalar>(h_max);
-    r.information_index = static_cast<Scalar>(static_cast<double>(settings.lambda) * (h_max - bounded.entropy_bits));
-    r.diameter = d.diameter;
-    r.connected = d.components == 1;
-    r.exponents_evaluated = bounded.exponents_evaluated;
-    return r;
+    return entropy_result(bounded.entropy_bits, g.num_nodes(), d.diameter, d.components == 1,
+                          bounded.exponents_evaluated);
   }
 
   /// The index alone (what CGESimilarity compares): compute_index(g).information_index.
@@ -153,21 +146,25 @@ class DegreeDegreeEntropy {
     const double log_alpha = std::log(static_cast<double>(settings.alpha));
     std::vector<double> log_f(exponent.size());
     for (std::size_t v = 0; v < exponent.size(); ++v) log_f[v] = exponent[v] * log_alpha;
-    const double h = softmax_entropy_bits(log_f);
-    const double h_max = std::log2(static_cast<double>(n));
-
-    Result r;
+    Result r = entropy_result(softmax_entropy_bits(log_f), n, rho, table.connected, n);
     r.exponents.assign(exponent.begin(), exponent.end());
-    r.entropy_bits = static_cast<Scalar>(h);
-    r.max_entropy_bits = static_cast<Scalar>(h_max);
-    r.information_index = static_cast<Scalar>(static_cast<double>(settings.lambda) * (h_max - h));
-    r.diameter = rho;
-    r.connected = table.connected;
-    r.exponents_evaluated = n;
     return r;
   }
 
  private:
+  /// H, log2 |V| and I = lambda (log2 |V| - H) in one place for compute() and compute_index().
+  Result entropy_result(double h, std::int32_t n, std::int32_t rho, bool connected, std::int32_t evaluated) const {
+    const double h_max = std::log2(static_cast<double>(n));
+    Result r;
+    r.entropy_bits = static_cast<Scalar>(h);
+    r.max_entropy_bits = static_cast<Scalar>(h_max);
+    r.information_index = static_cast<Scalar>(static_cast<double>(settings.lambda) * (h_max - h));
+    r.diameter = rho;
+    r.connected = connected;
+    r.exponents_evaluated = evaluated;
+    return r;
+  }
+
   /// c[k] = c_k for k = 1..rho; c[0] is unused.
   std::vector<double> coefficient_table(std::int32_t rho) const {
     std::vector<double> c(static_cast<std::size_t>(rho) + 1, 0.0);

@@ -53,23 +53,24 @@ WeightBoundedEntropy weight_bounded_entropy(const Graph<Scalar>& g, const std::v
                                             double log_alpha, double negligible_log_weight) {
   const std::int32_t n = g.num_nodes();
   const std::size_t size = static_cast<std::size_t>(n);
-  // c_1 Delta(v, 1): at level 1 every tie mode holds |d(v) - d(u)| at each neighbour u, summed in
-  // ascending order as a level is summed, so this is the search's first partial sum.
+  const TwinClasses twins = twin_classes(g);
+  std::vector<std::int32_t> order;
+  order.reserve(static_cast<std::size_t>(twins.num_classes));
+  for (std::int32_t v = 0; v < n; ++v) {
+    if (twins.representative[static_cast<std::size_t>(v)] == v) order.push_back(v);
+  }
+  // c_1 Delta(v, 1) of the representatives: at level 1 every tie mode holds |d(v) - d(u)| at each
+  // neighbour u, summed in ascending order as a level is summed, so this is the search's first
+  // partial sum.
   std::vector<double> first_term(size, 0.0);
   if (coefficients.size() > 1) {
-    for (std::int32_t v = 0; v < n; ++v) {
+    for (const std::int32_t v : order) {
       double delta = 0.0;
       for (const std::int32_t u : g.neighbors(v)) {
         delta += std::fabs(static_cast<double>(g.degree(v)) - static_cast<double>(g.degree(u)));
       }
       first_term[static_cast<std::size_t>(v)] = 0.0 + coefficients[1] * delta;
     }
-  }
-  const TwinClasses twins = twin_classes(g);
-  std::vector<std::int32_t> order;
-  order.reserve(static_cast<std::size_t>(twins.num_classes));
-  for (std::int32_t v = 0; v < n; ++v) {
-    if (twins.representative[static_cast<std::size_t>(v)] == v) order.push_back(v);
   }
   std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
     return first_term[static_cast<std::size_t>(a)] < first_term[static_cast<std::size_t>(b)];
