@@ -40,7 +40,8 @@ class SingleSourceDegreeSums {
 
   /// Runs from `source`. After each level k = 1, 2, ... it calls on_level(k, Delta(source, k));
   /// when that returns false the run stops. Returns the last level computed: the eccentricity of
-  /// the source when on_level never stopped it.
+  /// the source when on_level never stopped it. Inside on_level, level_nodes() and node_term(u)
+  /// describe level k.
   template <typename OnLevel>
   std::int32_t run(std::int32_t source, OnLevel&& on_level) {
     next_generation();
@@ -109,10 +110,24 @@ class SingleSourceDegreeSums {
           sum[static_cast<std::size_t>(next[i])] *= factor;
         }
       }
+      level_nodes_ = next;
+      level_size_ = next_size;
       if (!on_level(k, layer)) return k;
       std::swap(frontier, next);
       frontier_size = next_size;
     }
+  }
+
+  /// During on_level: the nodes at distance k from the source, in ascending order.
+  const std::int32_t* level_begin() const { return level_nodes_; }
+  const std::int32_t* level_end() const { return level_nodes_ + level_size_; }
+
+  /// During on_level, for a node u of level k: its term of Delta(source, k), i.e. S[u] (TieMode::all),
+  /// S[u] / N[u] (TieMode::mean) or M[u] (TieMode::min). Every one of these is symmetric in the
+  /// pair (source, u): a shortest path read backwards is a shortest path with the same degree steps.
+  double node_term(std::int32_t u) const {
+    const std::size_t i = static_cast<std::size_t>(u);
+    return Mode == TieMode::mean ? sum_[i] / count_[i] : sum_[i];
   }
 
  private:
@@ -131,6 +146,8 @@ class SingleSourceDegreeSums {
   std::vector<double> count_, sum_;   // N and S (or M), where stamped
   std::vector<std::int32_t> frontier_, next_;  // one level each (|V| entries)
   std::uint32_t generation_ = 0;
+  const std::int32_t* level_nodes_ = nullptr;  // the level of the current on_level call
+  std::size_t level_size_ = 0;
 };
 
 }  // namespace detail
