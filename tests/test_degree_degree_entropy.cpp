@@ -27,6 +27,7 @@
 #include "cge/entropy/single_source_degree_sums.hpp"
 #include "cge/entropy/softmax_entropy.hpp"
 #include "cge/entropy/weight_bounded_entropy.hpp"
+#include "cge/graph/adjacency_bitsets.hpp"
 #include "cge/graph/graph.hpp"
 #include "cge/graph/hop_diameter.hpp"
 #include "cge/graph/twin_classes.hpp"
@@ -1354,6 +1355,23 @@ std::pair<int, int> brute_diameter_and_components(const SmallGraph& sg) {
   return {diameter, components};
 }
 
+/// A single-source kernel for g with what it needs beside it (the bitset kernel's rows).
+template <TieMode Mode, template <TieMode, typename> class Kernel>
+struct KernelFor;
+
+template <TieMode Mode>
+struct KernelFor<Mode, cge::detail::SingleSourceDegreeSums> {
+  explicit KernelFor(const cge::Graph<double>& g) : sums(g) {}
+  cge::detail::SingleSourceDegreeSums<Mode, double> sums;
+};
+
+template <TieMode Mode>
+struct KernelFor<Mode, cge::detail::BitsetSingleSourceDegreeSums> {
+  explicit KernelFor(const cge::Graph<double>& g) : rows(g), sums(g, rows) {}
+  cge::AdjacencyBitsets rows;
+  cge::detail::BitsetSingleSourceDegreeSums<Mode, double> sums;
+};
+
 /// The table a single-source kernel (SingleSourceDegreeSums by default) gives when never stopped,
 /// source by source.
 template <TieMode Mode, template <TieMode, typename> class Kernel = cge::detail::SingleSourceDegreeSums>
@@ -1361,7 +1379,8 @@ cge::DegreeSumTable single_source_table(const cge::Graph<double>& g) {
   cge::DegreeSumTable t;
   t.num_nodes = g.num_nodes();
   t.row_offsets.assign(static_cast<std::size_t>(g.num_nodes()) + 1, 0);
-  Kernel<Mode, double> sums(g);
+  KernelFor<Mode, Kernel> kernel(g);
+  auto& sums = kernel.sums;
   for (std::int32_t s = 0; s < g.num_nodes(); ++s) {
     std::int32_t expected_level = 1;
     const std::int32_t ecc = sums.run(s, [&](std::int32_t k, double delta) {
@@ -1465,10 +1484,15 @@ TEST_CASE("hop_diameter equals the largest BFS eccentricity, with the component 
   for (const SmallGraph& sg : graphs) {
     INFO(sg.name << " (" << sg.n << " nodes)");
     const auto [diameter, components] = brute_diameter_and_components(sg);
-    const cge::HopDiameter d = cge::hop_diameter(to_graph(sg));
+    const cge::Graph<double> g = to_graph(sg);
+    const cge::HopDiameter d = cge::hop_diameter(g);
     REQUIRE(d.diameter == diameter);
     REQUIRE(d.components == components);
     CHECK(d.searches <= sg.n);
+    const cge::HopDiameter on_bitsets = cge::hop_diameter(g, cge::AdjacencyBitsets(g));
+    REQUIRE(on_bitsets.diameter == diameter);
+    REQUIRE(on_bitsets.components == components);
+    REQUIRE(on_bitsets.searches == d.searches);  // the same distances, so the same sources
   }
   const cge::HopDiameter empty = cge::hop_diameter(cge::Graph<double>{});
   CHECK(empty.diameter == 0);
@@ -1549,7 +1573,8 @@ std::vector<SmallGraph> single_source_graphs(std::mt19937& rng) {
 /// run must leave nothing behind that changes a later one.
 template <TieMode Mode, template <TieMode, typename> class Kernel>
 void require_stopped_runs_match(std::mt19937& rng, const cge::Graph<double>& g, const cge::DegreeSumTable& ref) {
-  Kernel<Mode, double> sums(g);
+  KernelFor<Mode, Kernel> kernel(g);
+  auto& sums = kernel.sums;
   const std::vector<int> sources = random_permutation(rng, g.num_nodes());
   for (const int s : sources) {
     const std::int32_t ecc = ref.eccentricity(s);
@@ -1615,7 +1640,8 @@ void require_levels_and_symmetric_terms(const SmallGraph& sg) {
   const std::vector<std::vector<int>> dist = all_distances(sg);
   const std::size_t n = static_cast<std::size_t>(sg.n);
   std::vector<double> term(n * n, -1.0);
-  Kernel<Mode, double> sums(g);
+  KernelFor<Mode, Kernel> kernel(g);
+  auto& sums = kernel.sums;
   for (int s = 0; s < sg.n; ++s) {
     sums.run(s, [&](std::int32_t k, double delta) {
       std::vector<std::int32_t> expected;
@@ -1672,13 +1698,38 @@ TEST_CASE("single-source kernels: the level lists, and node terms symmetric in t
   }
 }
 
-TEST_CASE("bitset_kernel_pays on short rows only: GraphBuilder's node order, not a random one", "[dde][kernel]") {
+TEST_CASE("AdjacencyBitsets: the rows are the neighbour sets, and pay on short rows only", "[dde][kernel]") {
   std::mt19937 rng(6161);
   const SmallGraph built = geometric_graph(1000, 16);
-  CHECK(cge::detail::bitset_kernel_pays(to_graph(built)));
-  CHECK_FALSE(cge::detail::bitset_kernel_pays(to_graph(relabel(built, random_permutation(rng, built.n)))));
-  CHECK_FALSE(cge::detail::bitset_kernel_pays(cge::Graph<double>{}));
-  for (int v = 0; v < 5; ++v) CHECK(cge::detail::row_span(to_graph(isolated(5)), v).end == 0);
+  const SmallGraph shuffled = relabel(built, random_permutation(rng, built.n));
+  CHECK(cge::AdjacencyBitsets::rows_pay(to_graph(built)));
+  CHECK_FALSE(cge::AdjacencyBitsets::rows_pay(to_graph(shuffled)));
+  CHECK_FALSE(cge::AdjacencyBitsets::rows_pay(cge::Graph<double>{}));
+  for (const SmallGraph& sg : {built, shuffled, disjoint_union(star_of_cliques(3, 30), isolated(70))}) {
+    const cge::Graph<double> g = to_graph(sg);
+    const cge::AdjacencyBitsets rows(g);
+    REQUIRE(rows.words() == (static_cast<std::size_t>(sg.n) + 63) / 64);
+    std::size_t stored = 0;
+    for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
+      std::set<std::int32_t> expected(g.neighbors(v).begin(), g.neighbors(v).end());
+      std::set<std::int32_t> found;
+      const cge::AdjacencyBitsets::Span span = rows.span(v);
+      for (std::size_t w = span.first; w < span.end; ++w) {
+        for (int b = 0; b < 64; ++b) {
+          if ((rows.stored_row(v)[w - span.first] >> b) & 1u) found.insert(static_cast<std::int32_t>(w * 64 + static_cast<std::size_t>(b)));
+        }
+      }
+      REQUIRE(found == expected);
+      if (!expected.empty()) {  // the span is tight: its first and last words hold a neighbour
+        REQUIRE(span.first == static_cast<std::size_t>(*expected.begin()) / 64);
+        REQUIRE(span.end == static_cast<std::size_t>(*expected.rbegin()) / 64 + 1);
+      } else {
+        REQUIRE(span.end == span.first);
+      }
+      stored += span.end - span.first;
+    }
+    REQUIRE(rows.stored_words() == stored);
+  }
 }
 
 namespace {
@@ -1689,8 +1740,10 @@ void require_kernels_agree_on_bounded_entropy(const cge::Graph<double>& g, const
   using cge::detail::BitsetSingleSourceDegreeSums;
   using cge::detail::SingleSourceDegreeSums;
   const double log_alpha = std::log(alpha);
-  const auto list = cge::detail::weight_bounded_entropy_with<SingleSourceDegreeSums<Mode, double>>(g, c, log_alpha, cut);
-  const auto bits = cge::detail::weight_bounded_entropy_with<BitsetSingleSourceDegreeSums<Mode, double>>(g, c, log_alpha, cut);
+  KernelFor<Mode, SingleSourceDegreeSums> list_kernel(g);
+  KernelFor<Mode, BitsetSingleSourceDegreeSums> bitset_kernel(g);
+  const auto list = cge::detail::weight_bounded_entropy_with(g, list_kernel.sums, c, log_alpha, cut);
+  const auto bits = cge::detail::weight_bounded_entropy_with(g, bitset_kernel.sums, c, log_alpha, cut);
   REQUIRE(std::memcmp(&list.entropy_bits, &bits.entropy_bits, sizeof(double)) == 0);
   REQUIRE(list.exponents_evaluated == bits.exponents_evaluated);
   REQUIRE(list.searches_skipped == bits.searches_skipped);

@@ -5,13 +5,11 @@
 //
 // Why a second kernel. On the small dense graphs a frame gives (a few hundred nodes, mean degree
 // about 14, many cliques) most arcs a BFS scans lead back to a level it has already finished. Here
-// the next level is found as (OR of the frontier's neighbour rows) AND NOT visited, one word
-// operation per 64 nodes, and each new node pulls its predecessors from (its row AND frontier),
-// which lists them in ascending order: only the arcs between consecutive levels are touched, and
-// the levels come out sorted without a sort. A search costs about 2 |V| / 64 word operations per
-// node it reaches plus its predecessor arcs, against the neighbour-list kernel's degree arcs per
-// node, so it pays on graphs where |V| / 64 is small next to the mean degree
-// (`bitset_kernel_pays`). Memory: |V|^2 / 8 bytes of rows.
+// the next level is found as (OR of the frontier's rows) AND NOT visited (AdjacencyBitsets, one
+// word operation per 64 nodes), and each new node pulls its predecessors from (its row AND
+// frontier), which lists them in ascending order: only the arcs between consecutive levels are
+// touched, and the levels come out sorted without a sort. Words are touched only within the
+// spans of the rows and of the frontier. It pays where AdjacencyBitsets::rows_pay.
 
 #include <algorithm>
 #include <cmath>
@@ -22,80 +20,27 @@
 #include "cge/core/bits.hpp"
 #include "cge/entropy/bit_parallel_degree_sums.hpp"
 #include "cge/entropy/degree_sum_table.hpp"
+#include "cge/graph/adjacency_bitsets.hpp"
 #include "cge/graph/graph.hpp"
 
 namespace cge {
 namespace detail {
 
-/// Words of 64 bits a node's adjacency row takes in BitsetSingleSourceDegreeSums.
-inline std::size_t bitset_row_words(std::int32_t num_nodes) {
-  return (static_cast<std::size_t>(num_nodes) + 63) / 64;
-}
-
-/// The words [first, end) of node v's adjacency row that hold its neighbours (empty without any).
-struct RowSpan {
-  std::size_t first = 0, end = 0;
-};
-
-template <typename Scalar>
-RowSpan row_span(const Graph<Scalar>& g, std::int32_t v) {
-  RowSpan span;
-  bool any = false;
-  std::int32_t lowest = 0, highest = 0;
-  for (const std::int32_t u : g.neighbors(v)) {
-    lowest = any ? std::min(lowest, u) : u;
-    highest = any ? std::max(highest, u) : u;
-    any = true;
-  }
-  if (any) span = {static_cast<std::size_t>(lowest) / 64, static_cast<std::size_t>(highest) / 64 + 1};
-  return span;
-}
-
-/// Whether BitsetSingleSourceDegreeSums is the faster kernel for g: when its rows, word spans from
-/// a node's lowest to its highest neighbour, hold no more words than the graph has arcs. Node
-/// orders that keep neighbours close (the canonical (y, x) order of GraphBuilder) give spans of a
-/// few words. Both kernels give the same bits; this only picks the faster one (docs/BENCHMARK.md),
-/// and it bounds the rows' memory by 8 bytes per arc.
-template <typename Scalar>
-bool bitset_kernel_pays(const Graph<Scalar>& g) {
-  std::int64_t span_words = 0;
-  for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
-    const RowSpan span = row_span(g, v);
-    span_words += static_cast<std::int64_t>(span.end - span.first);
-  }
-  return g.num_nodes() > 0 && span_words <= 2 * static_cast<std::int64_t>(g.num_edges());
-}
-
 template <TieMode Mode, typename Scalar>
 class BitsetSingleSourceDegreeSums {
  public:
-  explicit BitsetSingleSourceDegreeSums(const Graph<Scalar>& g)
-      : words_(bitset_row_words(g.num_nodes())),
+  /// rows: the adjacency bitsets of g, which must outlive this object.
+  BitsetSingleSourceDegreeSums(const Graph<Scalar>& g, const AdjacencyBitsets& rows)
+      : rows_(rows),
         degree_(static_cast<std::size_t>(g.num_nodes())),
         count_(static_cast<std::size_t>(g.num_nodes()), 0.0),
         sum_(static_cast<std::size_t>(g.num_nodes()), 0.0),
-        visited_(words_, 0),
-        frontier_bits_(words_, 0),
-        next_bits_(words_, 0),
+        visited_(rows.words(), 0),
+        frontier_bits_(rows.words(), 0),
+        next_bits_(rows.words(), 0),
         frontier_(static_cast<std::size_t>(g.num_nodes())),
-        next_(static_cast<std::size_t>(g.num_nodes())),
-        row_first_(static_cast<std::size_t>(g.num_nodes()), 0),
-        row_end_(static_cast<std::size_t>(g.num_nodes()), 0),
-        row_base_(static_cast<std::size_t>(g.num_nodes()), 0) {
-    std::size_t packed = 0;
-    for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
-      const std::size_t sv = static_cast<std::size_t>(v);
-      degree_[sv] = g.degree(v);
-      const RowSpan span = row_span(g, v);
-      row_first_[sv] = span.first;
-      row_end_[sv] = span.end;
-      row_base_[sv] = static_cast<std::ptrdiff_t>(packed) - static_cast<std::ptrdiff_t>(span.first);
-      packed += span.end - span.first;
-    }
-    rows_.assign(packed, 0);
-    for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
-      for (const std::int32_t u : g.neighbors(v)) rows_[word_index(v, static_cast<std::size_t>(u) / 64)] |= bit(u);
-    }
+        next_(static_cast<std::size_t>(g.num_nodes())) {
+    for (std::int32_t v = 0; v < g.num_nodes(); ++v) degree_[static_cast<std::size_t>(v)] = g.degree(v);
   }
 
   /// As SingleSourceDegreeSums::run: after each level k = 1, 2, ... it calls on_level(k, Delta(source, k))
@@ -103,9 +48,7 @@ class BitsetSingleSourceDegreeSums {
   /// level_begin() .. level_end() and node_term(u) describe level k.
   template <typename OnLevel>
   std::int32_t run(std::int32_t source, OnLevel&& on_level) {
-    const std::size_t words = words_;
-    const std::size_t* const row_first = row_first_.data();
-    const std::size_t* const row_end = row_end_.data();
+    const std::size_t words = rows_.words();
     const double* const degree = degree_.data();
     double* const count = count_.data();
     double* const sum = sum_.data();
@@ -120,8 +63,8 @@ class BitsetSingleSourceDegreeSums {
     // frontier's nodes occupy, and next_bits is zero everywhere.
     std::fill(visited, visited + words, std::uint64_t{0});
     const std::size_t s = static_cast<std::size_t>(source);
-    visited[s / 64] |= bit(source);
-    frontier_bits[s / 64] |= bit(source);
+    visited[s / 64] |= AdjacencyBitsets::bit(source);
+    frontier_bits[s / 64] |= AdjacencyBitsets::bit(source);
     count[s] = 1.0;
     sum[s] = 0.0;
     frontier[0] = source;
@@ -132,11 +75,11 @@ class BitsetSingleSourceDegreeSums {
       const std::size_t frontier_end = static_cast<std::size_t>(frontier[frontier_size - 1]) / 64 + 1;
       std::size_t next_first = words, next_end = 0;
       for (std::size_t f = 0; f < frontier_size; ++f) {
-        const std::size_t p = static_cast<std::size_t>(frontier[f]);
-        const std::uint64_t* row = rows_.data() + row_base_[p];  // row[w] for w in [row_first[p], row_end[p])
-        for (std::size_t w = row_first[p]; w < row_end[p]; ++w) next_bits[w] |= row[w];
-        next_first = std::min(next_first, row_first[p]);
-        next_end = std::max(next_end, row_end[p]);
+        const AdjacencyBitsets::Span span = rows_.span(frontier[f]);
+        const std::uint64_t* row = rows_.stored_row(frontier[f]);
+        for (std::size_t w = span.first; w < span.end; ++w) next_bits[w] |= row[w - span.first];
+        next_first = std::min(next_first, span.first);
+        next_end = std::max(next_end, span.end);
       }
       std::uint64_t any = 0;
       for (std::size_t w = next_first; w < next_end; ++w) {
@@ -159,13 +102,14 @@ class BitsetSingleSourceDegreeSums {
           const std::int32_t u = static_cast<std::int32_t>(w * 64 + static_cast<std::size_t>(lowest_bit(pending)));
           const std::size_t su = static_cast<std::size_t>(u);
           const double degree_u = degree[su];
-          const std::uint64_t* row = rows_.data() + row_base_[su];
+          const AdjacencyBitsets::Span span = rows_.span(u);
+          const std::uint64_t* row = rows_.stored_row(u);
           double count_u = 0.0;
           double sum_u = start;
-          const std::size_t first = std::max(row_first[su], frontier_first);
-          const std::size_t end = std::min(row_end[su], frontier_end);
+          const std::size_t first = std::max(span.first, frontier_first);
+          const std::size_t end = std::min(span.end, frontier_end);
           for (std::size_t pw = first; pw < end; ++pw) {
-            for (std::uint64_t preds = row[pw] & frontier_bits[pw]; preds != 0; preds &= preds - 1) {
+            for (std::uint64_t preds = row[pw - span.first] & frontier_bits[pw]; preds != 0; preds &= preds - 1) {
               const std::size_t p = pw * 64 + static_cast<std::size_t>(lowest_bit(preds));
               const double diff = std::fabs(degree[p] - degree_u);
               if (Mode == TieMode::min) {
@@ -218,22 +162,11 @@ class BitsetSingleSourceDegreeSums {
   }
 
  private:
-  static std::uint64_t bit(std::int32_t node) { return std::uint64_t{1} << (static_cast<unsigned>(node) % 64); }
-
-  std::size_t word_index(std::int32_t v, std::size_t w) const {
-    return static_cast<std::size_t>(row_base_[static_cast<std::size_t>(v)] + static_cast<std::ptrdiff_t>(w));
-  }
-
-  std::size_t words_;
+  const AdjacencyBitsets& rows_;
   std::vector<double> degree_;
   std::vector<double> count_, sum_;  // N and S (or M) of the nodes reached
   std::vector<std::uint64_t> visited_, frontier_bits_, next_bits_;
   std::vector<std::int32_t> frontier_, next_;  // one level each, ascending
-  // Node v's neighbours are the bits of words [row_first_[v], row_end_[v]) of its row, stored
-  // packed: word w at rows_[row_base_[v] + w].
-  std::vector<std::size_t> row_first_, row_end_;
-  std::vector<std::ptrdiff_t> row_base_;
-  std::vector<std::uint64_t> rows_;
   const std::int32_t* level_nodes_ = nullptr;
   std::size_t level_size_ = 0;
 };

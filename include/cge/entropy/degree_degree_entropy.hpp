@@ -19,6 +19,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
@@ -30,6 +31,7 @@
 #include "cge/entropy/shortest_path_degree_sums.hpp"
 #include "cge/entropy/softmax_entropy.hpp"
 #include "cge/entropy/weight_bounded_entropy.hpp"
+#include "cge/graph/adjacency_bitsets.hpp"
 #include "cge/graph/graph.hpp"
 #include "cge/graph/hop_diameter.hpp"
 
@@ -95,7 +97,10 @@ class DegreeDegreeEntropy {
     validate();
     if (g.num_nodes() == 0) throw std::invalid_argument("degree-degree entropy: the graph has no nodes");
     if (!bounded_search_applies()) return without_exponents(compute(g));
-    const HopDiameter d = hop_diameter(g);
+    // Bitset rows serve the diameter's and the index's searches where they pay.
+    std::optional<AdjacencyBitsets> rows;
+    if (AdjacencyBitsets::rows_pay(g)) rows.emplace(g);
+    const HopDiameter d = rows ? hop_diameter(g, *rows) : hop_diameter(g);
     const std::vector<double> c = coefficient_table(d.diameter);
     for (std::size_t k = 1; k < c.size(); ++k) {
       if (!(c[k] >= 0.0) || !std::isfinite(c[k])) return without_exponents(compute(g));
@@ -105,13 +110,13 @@ class DegreeDegreeEntropy {
     detail::WeightBoundedEntropy bounded;
     switch (settings.ties) {
       case TieMode::all:
-        bounded = detail::weight_bounded_entropy<TieMode::all>(g, c, log_alpha, negligible);
+        bounded = detail::weight_bounded_entropy<TieMode::all>(g, rows ? &*rows : nullptr, c, log_alpha, negligible);
         break;
       case TieMode::mean:
-        bounded = detail::weight_bounded_entropy<TieMode::mean>(g, c, log_alpha, negligible);
+        bounded = detail::weight_bounded_entropy<TieMode::mean>(g, rows ? &*rows : nullptr, c, log_alpha, negligible);
         break;
       case TieMode::min:
-        bounded = detail::weight_bounded_entropy<TieMode::min>(g, c, log_alpha, negligible);
+        bounded = detail::weight_bounded_entropy<TieMode::min>(g, rows ? &*rows : nullptr, c, log_alpha, negligible);
         break;
     }
     return entropy_result(bounded.entropy_bits, g.num_nodes(), d.diameter, d.components == 1,

@@ -38,7 +38,7 @@
 // best-first order with saved, resumable searches (stop 17: it reaches the smallest exponent
 // first and visits up to a third fewer arcs, but saving and resuming cost more than that saves).
 //
-// Kernel. Each search runs on adjacency bitsets where the rows are short (bitset_kernel_pays:
+// Kernel. Each search runs on adjacency bitsets where they pay (AdjacencyBitsets::rows_pay:
 // GraphBuilder's graphs), else on the neighbour lists; both give the same bits.
 
 #include <algorithm>
@@ -75,10 +75,10 @@ inline bool exceeds_cut(double assembled_bound, double cut) {
   return assembled_bound * (1.0 - kAssembledBoundSafety) > cut;
 }
 
-/// The search below with single-source kernel Sums (SingleSourceDegreeSums or
+/// The search below with a single-source kernel for g (SingleSourceDegreeSums or
 /// BitsetSingleSourceDegreeSums: the same bits, different speeds).
 template <typename Sums, typename Scalar>
-WeightBoundedEntropy weight_bounded_entropy_with(const Graph<Scalar>& g, const std::vector<double>& coefficients,
+WeightBoundedEntropy weight_bounded_entropy_with(const Graph<Scalar>& g, Sums& sums, const std::vector<double>& coefficients,
                                                  double log_alpha, double negligible_log_weight) {
   const std::int32_t n = g.num_nodes();
   const std::size_t size = static_cast<std::size_t>(n);
@@ -114,7 +114,6 @@ WeightBoundedEntropy weight_bounded_entropy_with(const Graph<Scalar>& g, const s
   std::vector<double> exponent(size, 0.0);
   std::vector<std::uint8_t> complete(size, 0);
   WeightBoundedEntropy result;
-  Sums sums(g);
   // known[u * stride + k]: what the searches so far add to E(u) through sources at distance k
   // (see "Terms from other searches" above); tail[k]: their part beyond distance k for the source
   // being searched.
@@ -171,16 +170,18 @@ WeightBoundedEntropy weight_bounded_entropy_with(const Graph<Scalar>& g, const s
 }
 
 /// coefficients[k] = c_k for k = 1..diameter (index 0 unused), all finite and >= 0; log_alpha < 0;
-/// negligible_log_weight = G >= 1 (+infinity evaluates every node).
+/// negligible_log_weight = G >= 1 (+infinity evaluates every node). rows: g's adjacency bitsets,
+/// where they pay (AdjacencyBitsets::rows_pay), else nullptr for the neighbour-list kernel.
 template <TieMode Mode, typename Scalar>
-WeightBoundedEntropy weight_bounded_entropy(const Graph<Scalar>& g, const std::vector<double>& coefficients,
-                                            double log_alpha, double negligible_log_weight) {
-  if (bitset_kernel_pays(g)) {
-    return weight_bounded_entropy_with<BitsetSingleSourceDegreeSums<Mode, Scalar>>(g, coefficients, log_alpha,
-                                                                                   negligible_log_weight);
+WeightBoundedEntropy weight_bounded_entropy(const Graph<Scalar>& g, const AdjacencyBitsets* rows,
+                                            const std::vector<double>& coefficients, double log_alpha,
+                                            double negligible_log_weight) {
+  if (rows != nullptr) {
+    BitsetSingleSourceDegreeSums<Mode, Scalar> sums(g, *rows);
+    return weight_bounded_entropy_with(g, sums, coefficients, log_alpha, negligible_log_weight);
   }
-  return weight_bounded_entropy_with<SingleSourceDegreeSums<Mode, Scalar>>(g, coefficients, log_alpha,
-                                                                           negligible_log_weight);
+  SingleSourceDegreeSums<Mode, Scalar> sums(g);
+  return weight_bounded_entropy_with(g, sums, coefficients, log_alpha, negligible_log_weight);
 }
 
 }  // namespace detail

@@ -16,6 +16,8 @@
 #include <limits>
 #include <vector>
 
+#include "cge/core/bits.hpp"
+#include "cge/graph/adjacency_bitsets.hpp"
 #include "cge/graph/graph.hpp"
 
 namespace cge {
@@ -26,34 +28,96 @@ struct HopDiameter {
   std::int32_t searches = 0;    ///< breadth-first searches run (a cost figure, not a result)
 };
 
-/// Exact hop diameter and component count. An empty graph has diameter 0 and no component.
+namespace detail {
+
+/// Breadth-first distances over neighbour lists.
 template <typename Scalar>
-HopDiameter hop_diameter(const Graph<Scalar>& g) {
+class ListDistances {
+ public:
+  explicit ListDistances(const Graph<Scalar>& g) : g_(g) { queue_.reserve(static_cast<std::size_t>(g.num_nodes())); }
+
+  /// distance[w] for every node w of the source's component (members: that component's nodes,
+  /// the only entries it resets); returns the source's eccentricity.
+  std::int32_t operator()(std::int32_t source, const std::vector<std::int32_t>& members, std::vector<std::int32_t>& distance) {
+    for (const std::int32_t w : members) distance[static_cast<std::size_t>(w)] = -1;
+    distance[static_cast<std::size_t>(source)] = 0;
+    queue_.assign(1, source);
+    for (std::size_t head = 0; head < queue_.size(); ++head) {
+      const std::int32_t u = queue_[head];
+      for (const std::int32_t w : g_.neighbors(u)) {
+        if (distance[static_cast<std::size_t>(w)] < 0) {
+          distance[static_cast<std::size_t>(w)] = distance[static_cast<std::size_t>(u)] + 1;
+          queue_.push_back(w);
+        }
+      }
+    }
+    return distance[static_cast<std::size_t>(queue_.back())];
+  }
+
+ private:
+  const Graph<Scalar>& g_;
+  std::vector<std::int32_t> queue_;
+};
+
+/// The same distances level by level on adjacency bitsets (cge/graph/adjacency_bitsets.hpp).
+class BitsetDistances {
+ public:
+  explicit BitsetDistances(const AdjacencyBitsets& rows)
+      : rows_(rows), visited_(rows.words(), 0), next_(rows.words(), 0), frontier_(rows.num_nodes()), level_(rows.num_nodes()) {}
+
+  std::int32_t operator()(std::int32_t source, const std::vector<std::int32_t>&, std::vector<std::int32_t>& distance) {
+    std::fill(visited_.begin(), visited_.end(), std::uint64_t{0});
+    visited_[static_cast<std::size_t>(source) / 64] |= AdjacencyBitsets::bit(source);
+    distance[static_cast<std::size_t>(source)] = 0;
+    frontier_[0] = source;
+    std::size_t frontier_size = 1;
+    for (std::int32_t k = 1;; ++k) {
+      std::size_t first = next_.size(), end = 0;
+      for (std::size_t f = 0; f < frontier_size; ++f) {
+        const AdjacencyBitsets::Span span = rows_.span(frontier_[f]);
+        const std::uint64_t* row = rows_.stored_row(frontier_[f]);
+        for (std::size_t w = span.first; w < span.end; ++w) next_[w] |= row[w - span.first];
+        first = std::min(first, span.first);
+        end = std::max(end, span.end);
+      }
+      std::size_t level_size = 0;
+      for (std::size_t w = first; w < end; ++w) {
+        std::uint64_t fresh = next_[w] & ~visited_[w];
+        next_[w] = 0;
+        visited_[w] |= fresh;
+        for (; fresh != 0; fresh &= fresh - 1) {
+          const std::int32_t u = static_cast<std::int32_t>(w * 64 + static_cast<std::size_t>(lowest_bit(fresh)));
+          distance[static_cast<std::size_t>(u)] = k;
+          level_[level_size++] = u;
+        }
+      }
+      if (level_size == 0) return k - 1;
+      std::swap(frontier_, level_);
+      frontier_size = level_size;
+    }
+  }
+
+ private:
+  const AdjacencyBitsets& rows_;
+  std::vector<std::uint64_t> visited_, next_;  // next_ is all zero between levels
+  std::vector<std::int32_t> frontier_, level_;
+};
+
+/// hop_diameter with a distance search (ListDistances or BitsetDistances: the same distances).
+template <typename Scalar, typename Distances>
+HopDiameter hop_diameter_with(const Graph<Scalar>& g, Distances& distances_from) {
   const std::int32_t n = g.num_nodes();
   const std::size_t size = static_cast<std::size_t>(n);
   HopDiameter result;
   std::vector<std::int32_t> component(size, -1);
   std::vector<std::int32_t> distance(size, -1);
   std::vector<std::int32_t> lower(size, 0), upper(size, 0);
-  std::vector<std::int32_t> members, queue;
-  queue.reserve(size);
+  std::vector<std::int32_t> members;
 
   // Distances from `source` within its component; returns its eccentricity.
   auto search = [&](std::int32_t source) {
-    for (const std::int32_t w : members) distance[static_cast<std::size_t>(w)] = -1;
-    distance[static_cast<std::size_t>(source)] = 0;
-    queue.assign(1, source);
-    for (std::size_t head = 0; head < queue.size(); ++head) {
-      const std::int32_t u = queue[head];
-      for (const std::int32_t w : g.neighbors(u)) {
-        if (distance[static_cast<std::size_t>(w)] < 0) {
-          distance[static_cast<std::size_t>(w)] = distance[static_cast<std::size_t>(u)] + 1;
-          queue.push_back(w);
-        }
-      }
-    }
     ++result.searches;
-    return distance[static_cast<std::size_t>(queue.back())];
+    return distances_from(source, members, distance);
   };
 
   for (std::int32_t seed = 0; seed < n; ++seed) {
@@ -111,6 +175,22 @@ HopDiameter hop_diameter(const Graph<Scalar>& g) {
     result.diameter = std::max(result.diameter, best_lower);
   }
   return result;
+}
+
+}  // namespace detail
+
+/// Exact hop diameter and component count. An empty graph has diameter 0 and no component.
+template <typename Scalar>
+HopDiameter hop_diameter(const Graph<Scalar>& g) {
+  detail::ListDistances<Scalar> distances(g);
+  return detail::hop_diameter_with(g, distances);
+}
+
+/// The same, searching on g's adjacency bitsets (faster where AdjacencyBitsets::rows_pay).
+template <typename Scalar>
+HopDiameter hop_diameter(const Graph<Scalar>& g, const AdjacencyBitsets& rows) {
+  detail::BitsetDistances distances(rows);
+  return detail::hop_diameter_with(g, distances);
 }
 
 }  // namespace cge

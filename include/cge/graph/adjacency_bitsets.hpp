@@ -1,0 +1,98 @@
+#pragma once
+// Adjacency rows as bitsets over node indices, for breadth-first searches on small dense graphs:
+// a BFS level is then (OR of the frontier's rows) AND NOT visited, one word operation per 64
+// nodes, and a node's neighbours in a set are (its row AND the set), listed in ascending order.
+//
+// A row is stored only over the words from its lowest to its highest neighbour, so memory and
+// work follow how far apart neighbours are in the node order. GraphBuilder's canonical (y, x)
+// order keeps neighbours close (a few words per row on frame graphs); a random order spreads
+// every row over |V| / 64 words, where neighbour lists are faster (`rows_pay`).
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "cge/graph/graph.hpp"
+
+namespace cge {
+
+class AdjacencyBitsets {
+ public:
+  /// The words [first, end) of a node's row that hold its neighbours (empty without any).
+  struct Span {
+    std::size_t first = 0, end = 0;
+  };
+
+  AdjacencyBitsets() = default;
+
+  template <typename Scalar>
+  explicit AdjacencyBitsets(const Graph<Scalar>& g)
+      : words_((static_cast<std::size_t>(g.num_nodes()) + 63) / 64),
+        spans_(static_cast<std::size_t>(g.num_nodes())),
+        offset_(static_cast<std::size_t>(g.num_nodes()), 0) {
+    std::size_t stored = 0;
+    for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
+      const std::size_t sv = static_cast<std::size_t>(v);
+      spans_[sv] = row_span(g, v);
+      offset_[sv] = stored;
+      stored += spans_[sv].end - spans_[sv].first;
+    }
+    bits_.assign(stored, 0);
+    for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
+      const std::size_t sv = static_cast<std::size_t>(v);
+      for (const std::int32_t u : g.neighbors(v)) {
+        bits_[offset_[sv] + static_cast<std::size_t>(u) / 64 - spans_[sv].first] |= bit(u);
+      }
+    }
+  }
+
+  /// Words of a full row: one bit per node.
+  std::size_t words() const { return words_; }
+  std::size_t num_nodes() const { return spans_.size(); }
+  /// Words stored for all rows together.
+  std::size_t stored_words() const { return bits_.size(); }
+
+  const Span& span(std::int32_t v) const { return spans_[static_cast<std::size_t>(v)]; }
+  /// The stored words of v's row: element i is word span(v).first + i.
+  const std::uint64_t* stored_row(std::int32_t v) const { return bits_.data() + offset_[static_cast<std::size_t>(v)]; }
+
+  /// The bit of node v within its word (word v / 64).
+  static std::uint64_t bit(std::int32_t v) { return std::uint64_t{1} << (static_cast<unsigned>(v) % 64); }
+
+  template <typename Scalar>
+  static Span row_span(const Graph<Scalar>& g, std::int32_t v) {
+    Span span;
+    bool any = false;
+    std::int32_t lowest = 0, highest = 0;
+    for (const std::int32_t u : g.neighbors(v)) {
+      lowest = any ? std::min(lowest, u) : u;
+      highest = any ? std::max(highest, u) : u;
+      any = true;
+    }
+    if (any) span = {static_cast<std::size_t>(lowest) / 64, static_cast<std::size_t>(highest) / 64 + 1};
+    return span;
+  }
+
+  /// Whether searches on these rows beat neighbour lists on g: when the rows' spans hold no more
+  /// words than the graph has arcs. That bounds the rows' memory by 8 bytes per arc, and a search
+  /// then touches about as many words per node as a list search touches arcs, at a fraction of
+  /// the cost per word (docs/BENCHMARK.md).
+  template <typename Scalar>
+  static bool rows_pay(const Graph<Scalar>& g) {
+    std::int64_t span_words = 0;
+    for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
+      const Span s = row_span(g, v);
+      span_words += static_cast<std::int64_t>(s.end - s.first);
+    }
+    return g.num_nodes() > 0 && span_words <= 2 * static_cast<std::int64_t>(g.num_edges());
+  }
+
+ private:
+  std::size_t words_ = 0;
+  std::vector<Span> spans_;
+  std::vector<std::size_t> offset_;  // v's stored words start at bits_[offset_[v]]
+  std::vector<std::uint64_t> bits_;
+};
+
+}  // namespace cge
