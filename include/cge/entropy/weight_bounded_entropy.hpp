@@ -17,13 +17,14 @@
 // term of Delta(v, d(v, u)) (S, S / N or the minimum, by tie mode) and T(v, u) = T(u, v): a
 // shortest path read backwards is one, with the same degree steps. So every search from s hands
 // each node u it reaches a term of E(u), and the whole twin class of s hands u that term times
-// the class size (swapping s with a twin fixes u). Before and during the search from v, the terms
-// that earlier searches handed v from distances beyond the levels done so far are a lower bound of
-// the rest of E(v); the partial sum plus that bound decides the cut. Because this bound adds the
-// same terms in another order, it may round above v's own sum by a few ulps; it decides only with
-// the margin kAssembledBoundSafety, so a node is never left out that v's own search would keep.
-// On the benchmark's second frame graph about half of the searches are skipped this way. The
-// terms take |V| (rho + 1) doubles, the memory compute()'s table takes too.
+// the class size (swapping s with a twin fixes u). Before v's search, its first term plus what
+// earlier searches handed it from distance 2 or more is a lower bound of E(v), and v is not
+// searched at all when that passes the cut. Because the bound adds the same terms in another
+// order, it may round above v's own sum by a few ulps; it decides only with the margin
+// kAssembledBoundSafety, so a node is never left out that its own search would keep. On the
+// benchmark's second frame graph 150 of 280 searches are skipped this way. (Keeping the handed
+// terms per distance, to bound the rest of E(v) during v's search too, saved another 3 to 6 % of
+// the time and cost |V| rho doubles: not kept.)
 //
 // Search order. Twins (cge/graph/twin_classes.hpp) have equal exponents, so one search serves a
 // whole class: only class representatives are searched, and every member takes its
@@ -114,21 +115,13 @@ WeightBoundedEntropy weight_bounded_entropy_with(const Graph<Scalar>& g, Sums& s
   std::vector<double> exponent(size, 0.0);
   std::vector<std::uint8_t> complete(size, 0);
   WeightBoundedEntropy result;
-  // known[u * stride + k]: what the searches so far add to E(u) through sources at distance k
-  // (see "Terms from other searches" above); tail[k]: their part beyond distance k for the source
-  // being searched.
-  const std::size_t stride = std::max<std::size_t>(coefficients.size(), 1);
-  std::vector<double> known(size * stride, 0.0);
-  std::vector<double> tail(stride + 1, 0.0);
+  // handed[u]: the terms of E(u) that the searches so far handed u from distance 2 or more (see
+  // "Terms from other searches" above); distance 1 is in first_term.
+  std::vector<double> handed(size, 0.0);
   for (const std::int32_t s : order) {
     const std::size_t source = static_cast<std::size_t>(s);
     if (first_term[source] > smallest + cut_offset) break;
-    const double* const known_s = known.data() + source * stride;
-    tail[stride - 1] = 0.0;
-    for (std::size_t k = stride - 1; k > 0; --k) tail[k - 1] = tail[k] + known_s[k];
-    // The level-1 term is known without searching (first_term), the rest only as far as other
-    // searches reached s.
-    if (exceeds_cut(first_term[source] + tail[1], smallest + cut_offset)) {
+    if (exceeds_cut(first_term[source] + handed[source], smallest + cut_offset)) {
       ++result.searches_skipped;
       continue;
     }
@@ -136,14 +129,15 @@ WeightBoundedEntropy weight_bounded_entropy_with(const Graph<Scalar>& g, Sums& s
     double e = 0.0;
     bool cut = false;
     sums.run(s, [&](std::int32_t k, double delta) {
-      const std::size_t level = static_cast<std::size_t>(k);
-      const double c = coefficients[level];
+      const double c = coefficients[static_cast<std::size_t>(k)];
       e += c * delta;
       if (!std::isfinite(e)) throw_exponent_not_finite();
-      for (const std::int32_t* u = sums.level_begin(); u != sums.level_end(); ++u) {
-        known[static_cast<std::size_t>(*u) * stride + level] += weight * c * sums.node_term(*u);
+      if (k >= 2) {
+        for (const std::int32_t* u = sums.level_begin(); u != sums.level_end(); ++u) {
+          handed[static_cast<std::size_t>(*u)] += weight * c * sums.node_term(*u);
+        }
       }
-      cut = e > smallest + cut_offset || exceeds_cut(e + tail[level], smallest + cut_offset);
+      cut = e > smallest + cut_offset;
       return !cut;
     });
     if (cut) continue;
