@@ -20,6 +20,7 @@
 #include "cge/core/bits.hpp"
 #include "cge/entropy/bit_parallel_degree_sums.hpp"
 #include "cge/entropy/degree_sum_table.hpp"
+#include "cge/entropy/single_source_degree_sums.hpp"
 #include "cge/graph/adjacency_bitsets.hpp"
 #include "cge/graph/graph.hpp"
 
@@ -27,14 +28,13 @@ namespace cge {
 namespace detail {
 
 template <TieMode Mode, typename Scalar>
-class BitsetSingleSourceDegreeSums {
+class BitsetSingleSourceDegreeSums : public SingleSourceLevel<Mode> {
  public:
   /// rows: the adjacency bitsets of g, which must outlive this object.
   BitsetSingleSourceDegreeSums(const Graph<Scalar>& g, const AdjacencyBitsets& rows)
-      : rows_(rows),
+      : SingleSourceLevel<Mode>(static_cast<std::size_t>(g.num_nodes())),
+        rows_(rows),
         degree_(static_cast<std::size_t>(g.num_nodes())),
-        count_(static_cast<std::size_t>(g.num_nodes()), 0.0),
-        sum_(static_cast<std::size_t>(g.num_nodes()), 0.0),
         visited_(rows.words(), 0),
         frontier_bits_(rows.words(), 0),
         next_bits_(rows.words(), 0),
@@ -45,13 +45,13 @@ class BitsetSingleSourceDegreeSums {
 
   /// As SingleSourceDegreeSums::run: after each level k = 1, 2, ... it calls on_level(k, Delta(source, k))
   /// and stops when that returns false; returns the last level computed. Inside on_level,
-  /// level_begin() .. level_end() and node_term(u) describe level k.
+  /// level_begin() .. level_end() and node_term(u) (SingleSourceLevel) describe level k.
   template <typename OnLevel>
   std::int32_t run(std::int32_t source, OnLevel&& on_level) {
     const std::size_t words = rows_.words();
     const double* const degree = degree_.data();
-    double* const count = count_.data();
-    double* const sum = sum_.data();
+    double* const count = this->count_.data();
+    double* const sum = this->sum_.data();
     std::uint64_t* const visited = visited_.data();
     std::uint64_t* frontier_bits = frontier_bits_.data();
     std::uint64_t* next_bits = next_bits_.data();
@@ -73,14 +73,8 @@ class BitsetSingleSourceDegreeSums {
       // Words the frontier occupies (its nodes are ascending) and those its neighbours can occupy.
       const std::size_t frontier_first = static_cast<std::size_t>(frontier[0]) / 64;
       const std::size_t frontier_end = static_cast<std::size_t>(frontier[frontier_size - 1]) / 64 + 1;
-      std::size_t next_first = words, next_end = 0;
-      for (std::size_t f = 0; f < frontier_size; ++f) {
-        const AdjacencyBitsets::Span span = rows_.span(frontier[f]);
-        const std::uint64_t* row = rows_.stored_row(frontier[f]);
-        for (std::size_t w = span.first; w < span.end; ++w) next_bits[w] |= row[w - span.first];
-        next_first = std::min(next_first, span.first);
-        next_end = std::max(next_end, span.end);
-      }
+      const AdjacencyBitsets::Span touched = rows_.or_rows(frontier, frontier_size, next_bits);
+      const std::size_t next_first = touched.first, next_end = touched.end;
       std::uint64_t any = 0;
       for (std::size_t w = next_first; w < next_end; ++w) {
         next_bits[w] &= ~visited[w];
@@ -139,8 +133,8 @@ class BitsetSingleSourceDegreeSums {
       std::swap(frontier, next);
       std::swap(frontier_bits, next_bits);
       frontier_size = next_size;
-      level_nodes_ = frontier;
-      level_size_ = frontier_size;
+      this->level_nodes_ = frontier;
+      this->level_size_ = frontier_size;
       if (!on_level(k, layer)) {
         const std::size_t level_first = static_cast<std::size_t>(frontier[0]) / 64;
         const std::size_t level_end = static_cast<std::size_t>(frontier[frontier_size - 1]) / 64 + 1;
@@ -150,25 +144,11 @@ class BitsetSingleSourceDegreeSums {
     }
   }
 
-  /// During on_level: the nodes at distance k from the source, in ascending order.
-  const std::int32_t* level_begin() const { return level_nodes_; }
-  const std::int32_t* level_end() const { return level_nodes_ + level_size_; }
-
-  /// During on_level, for a node u of level k: its term of Delta(source, k), as
-  /// SingleSourceDegreeSums::node_term.
-  double node_term(std::int32_t u) const {
-    const std::size_t i = static_cast<std::size_t>(u);
-    return Mode == TieMode::mean ? sum_[i] / count_[i] : sum_[i];
-  }
-
  private:
   const AdjacencyBitsets& rows_;
   std::vector<double> degree_;
-  std::vector<double> count_, sum_;  // N and S (or M) of the nodes reached
   std::vector<std::uint64_t> visited_, frontier_bits_, next_bits_;
   std::vector<std::int32_t> frontier_, next_;  // one level each, ascending
-  const std::int32_t* level_nodes_ = nullptr;
-  std::size_t level_size_ = 0;
 };
 
 }  // namespace detail

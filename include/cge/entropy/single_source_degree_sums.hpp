@@ -22,17 +22,41 @@
 namespace cge {
 namespace detail {
 
+/// What a single-source kernel exposes during its on_level calls: the level's nodes and their terms.
+/// The kernels (SingleSourceDegreeSums, BitsetSingleSourceDegreeSums) keep N and S here.
+template <TieMode Mode>
+class SingleSourceLevel {
+ public:
+  /// During on_level: the nodes at distance k from the source, in ascending order.
+  const std::int32_t* level_begin() const { return level_nodes_; }
+  const std::int32_t* level_end() const { return level_nodes_ + level_size_; }
+
+  /// During on_level, for a node u of level k: its term of Delta(source, k), i.e. S[u] (TieMode::all),
+  /// S[u] / N[u] (TieMode::mean) or M[u] (TieMode::min). Every one of these is symmetric in the
+  /// pair (source, u): a shortest path read backwards is a shortest path with the same degree steps.
+  double node_term(std::int32_t u) const {
+    const std::size_t i = static_cast<std::size_t>(u);
+    return Mode == TieMode::mean ? sum_[i] / count_[i] : sum_[i];
+  }
+
+ protected:
+  explicit SingleSourceLevel(std::size_t num_nodes) : count_(num_nodes, 0.0), sum_(num_nodes, 0.0) {}
+
+  std::vector<double> count_, sum_;  // N and S (or M) of the nodes reached
+  const std::int32_t* level_nodes_ = nullptr;  // the level of the current on_level call
+  std::size_t level_size_ = 0;
+};
+
 template <TieMode Mode, typename Scalar>
-class SingleSourceDegreeSums {
+class SingleSourceDegreeSums : public SingleSourceLevel<Mode> {
  public:
   explicit SingleSourceDegreeSums(const Graph<Scalar>& g)
-      : offsets_(g.csr_offsets().data()),
+      : SingleSourceLevel<Mode>(static_cast<std::size_t>(g.num_nodes())),
+        offsets_(g.csr_offsets().data()),
         adjacency_(g.csr_adjacency().data()),
         degree_(static_cast<std::size_t>(g.num_nodes())),
         stamp_(static_cast<std::size_t>(g.num_nodes()), 0),
         level_(static_cast<std::size_t>(g.num_nodes()), 0),
-        count_(static_cast<std::size_t>(g.num_nodes()), 0.0),
-        sum_(static_cast<std::size_t>(g.num_nodes()), 0.0),
         frontier_(static_cast<std::size_t>(g.num_nodes())),
         next_(static_cast<std::size_t>(g.num_nodes())) {
     for (std::int32_t v = 0; v < g.num_nodes(); ++v) degree_[static_cast<std::size_t>(v)] = g.degree(v);
@@ -40,8 +64,8 @@ class SingleSourceDegreeSums {
 
   /// Runs from `source`. After each level k = 1, 2, ... it calls on_level(k, Delta(source, k));
   /// when that returns false the run stops. Returns the last level computed: the eccentricity of
-  /// the source when on_level never stopped it. Inside on_level, level_nodes() and node_term(u)
-  /// describe level k.
+  /// the source when on_level never stopped it. Inside on_level, level_begin() .. level_end() and
+  /// node_term(u) describe level k.
   template <typename OnLevel>
   std::int32_t run(std::int32_t source, OnLevel&& on_level) {
     next_generation();
@@ -52,8 +76,8 @@ class SingleSourceDegreeSums {
     const double* const degree = degree_.data();
     std::uint32_t* const stamp = stamp_.data();
     std::int32_t* const level = level_.data();
-    double* const count = count_.data();
-    double* const sum = sum_.data();
+    double* const count = this->count_.data();
+    double* const sum = this->sum_.data();
     std::int32_t* frontier = frontier_.data();
     std::int32_t* next = next_.data();
     const std::uint32_t generation = generation_;
@@ -110,24 +134,12 @@ class SingleSourceDegreeSums {
           sum[static_cast<std::size_t>(next[i])] *= factor;
         }
       }
-      level_nodes_ = next;
-      level_size_ = next_size;
+      this->level_nodes_ = next;
+      this->level_size_ = next_size;
       if (!on_level(k, layer)) return k;
       std::swap(frontier, next);
       frontier_size = next_size;
     }
-  }
-
-  /// During on_level: the nodes at distance k from the source, in ascending order.
-  const std::int32_t* level_begin() const { return level_nodes_; }
-  const std::int32_t* level_end() const { return level_nodes_ + level_size_; }
-
-  /// During on_level, for a node u of level k: its term of Delta(source, k), i.e. S[u] (TieMode::all),
-  /// S[u] / N[u] (TieMode::mean) or M[u] (TieMode::min). Every one of these is symmetric in the
-  /// pair (source, u): a shortest path read backwards is a shortest path with the same degree steps.
-  double node_term(std::int32_t u) const {
-    const std::size_t i = static_cast<std::size_t>(u);
-    return Mode == TieMode::mean ? sum_[i] / count_[i] : sum_[i];
   }
 
  private:
@@ -143,11 +155,8 @@ class SingleSourceDegreeSums {
   std::vector<double> degree_;
   std::vector<std::uint32_t> stamp_;  // == generation_: reached by the current run
   std::vector<std::int32_t> level_;   // distance from the current source, where stamped
-  std::vector<double> count_, sum_;   // N and S (or M), where stamped
   std::vector<std::int32_t> frontier_, next_;  // one level each (|V| entries)
   std::uint32_t generation_ = 0;
-  const std::int32_t* level_nodes_ = nullptr;  // the level of the current on_level call
-  std::size_t level_size_ = 0;
 };
 
 }  // namespace detail

@@ -57,6 +57,23 @@ class AdjacencyBitsets {
   /// The stored words of v's row: element i is word span(v).first + i.
   const std::uint64_t* stored_row(std::int32_t v) const { return bits_.data() + offset_[static_cast<std::size_t>(v)]; }
 
+  /// ORs the rows of nodes[0 .. count) into bits (words() words) and returns the words that can
+  /// have changed: the union of their spans (empty for no nodes or no neighbours).
+  Span or_rows(const std::int32_t* nodes, std::size_t count, std::uint64_t* bits) const {
+    Span touched{words_, 0};
+    for (std::size_t i = 0; i < count; ++i) {
+      const Span s = span(nodes[i]);
+      const std::uint64_t* row = stored_row(nodes[i]);
+      for (std::size_t w = s.first; w < s.end; ++w) bits[w] |= row[w - s.first];
+      if (s.first < s.end) {
+        touched.first = std::min(touched.first, s.first);
+        touched.end = std::max(touched.end, s.end);
+      }
+    }
+    if (touched.end == 0) touched.first = 0;
+    return touched;
+  }
+
   /// The bit of node v within its word (word v / 64).
   static std::uint64_t bit(std::int32_t v) { return std::uint64_t{1} << (static_cast<unsigned>(v) % 64); }
 

@@ -72,16 +72,9 @@ class BitsetDistances {
     frontier_[0] = source;
     std::size_t frontier_size = 1;
     for (std::int32_t k = 1;; ++k) {
-      std::size_t first = next_.size(), end = 0;
-      for (std::size_t f = 0; f < frontier_size; ++f) {
-        const AdjacencyBitsets::Span span = rows_.span(frontier_[f]);
-        const std::uint64_t* row = rows_.stored_row(frontier_[f]);
-        for (std::size_t w = span.first; w < span.end; ++w) next_[w] |= row[w - span.first];
-        first = std::min(first, span.first);
-        end = std::max(end, span.end);
-      }
+      const AdjacencyBitsets::Span touched = rows_.or_rows(frontier_.data(), frontier_size, next_.data());
       std::size_t level_size = 0;
-      for (std::size_t w = first; w < end; ++w) {
+      for (std::size_t w = touched.first; w < touched.end; ++w) {
         std::uint64_t fresh = next_[w] & ~visited_[w];
         next_[w] = 0;
         visited_[w] |= fresh;
