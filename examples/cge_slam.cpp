@@ -91,6 +91,7 @@ struct Options {
   std::uint64_t seed = 0;
   int frames = 0;  // 0: all (dataset) or kDefaultPresetFrames (rendered)
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
+  int keyframe_interval = cge::PatchKeyframeSettings<double>{}.interval_frames;  // mode YMK: k
   std::string loop_correction = "pgo+ba";  // none | pgo | pgo+ba
   // Depth term of the tracking refinement (0: pixels only) and local BA (on | off).
   double tracking_depth_sigma = cge::slam::TrackerSettings{}.refinement_depth_sigma_per_m;
@@ -365,6 +366,7 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
                            {"local_ba_window", used.local_mapping.covisible_keyframes},
                            {"local_ba_fixed", used.local_mapping.fixed_keyframes},
                            {"reference_min_observations", used.mapping.reference_min_observations},
+                           {"keyframe_interval", used.patch_keyframes.interval_frames},
                            {"loop_correction", opt.loop_correction}};
   j["dynamic_leak"] = dynamic_leak(frames);
   nlohmann::ordered_json stages;
@@ -418,6 +420,7 @@ int run(Options opt) {
   }
   settings.seed = opt.seed;
   settings.mapping.reference_min_observations = opt.reference_min_observations;
+  settings.patch_keyframes.interval_frames = opt.keyframe_interval;
   settings.keep_keyframe_images = opt.map;
   settings.loop_correction.enabled = opt.loop_correction != "none";
   settings.local_mapping.bundle_adjustment = opt.local_ba == "on";
@@ -697,6 +700,11 @@ int main(int argc, char** argv) {
   app.add_option("--reference-min-observations", opt.reference_min_observations,
                  "ORB-SLAM2 keyframe baseline: count the reference keyframe's map points seen by >= this many "
                  "keyframes (ORB-SLAM2's nMinObs)")
+      ->capture_default_str();
+  app.add_option("--keyframe-interval", opt.keyframe_interval,
+                 "mode YMK: frames per interval of the patch keyframe selector (k; its best candidate is inserted "
+                 "at the end of each interval)")
+      ->check(cge_tool::above_zero())
       ->capture_default_str();
   app.add_option("--out", opt.out, "output folder; must not exist or be empty, unless --force")->required();
   app.add_flag("--map", opt.map,

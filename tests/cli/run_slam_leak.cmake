@@ -5,6 +5,7 @@
 #    holds the defaults (combined, min_cge_score 0.5, normalised).
 #    mapping_settings holds the tracking and local-BA defaults.
 # 1b. --tracking-depth-sigma 0 and --local-ba off are recorded and change the trajectory.
+# 1c. --keyframe-interval is recorded and changes mode YMK's keyframes; 0 is refused (exit 2).
 # 2. --loop-scoring bow_only --loop-min-score 0.1 --cge-scaling raw are recorded in loop_settings.
 # 3. (with cge_sim) the same sequence written to a folder: the masks/ folder gives the same
 #    moving_keypoints per frame as the in-process renderer's labels; without masks/instances.csv
@@ -92,6 +93,7 @@ expect_json("${summary}" on mapping_settings local_ba)
 expect_json("${summary}" 10 mapping_settings local_ba_window)
 expect_json("${summary}" 10 mapping_settings local_ba_fixed)
 expect_json("${summary}" 1 mapping_settings reference_min_observations)
+expect_json("${summary}" 10 mapping_settings keyframe_interval)
 expect_json("${summary}" pgo\\+ba mapping_settings loop_correction)
 file(READ "${WORK}/rendered/trajectory.txt" default_trajectory)
 
@@ -113,6 +115,18 @@ file(READ "${WORK}/no_local_ba/trajectory.txt" trajectory)
 if(trajectory STREQUAL default_trajectory)
   message(FATAL_ERROR "--local-ba off left the trajectory unchanged")
 endif()
+
+# 1c. --keyframe-interval reaches the patch selector of mode YMK: recorded, and with k = 1 the
+#     best candidate of every frame's interval is inserted, so the keyframes change.
+run_tool(0 "${EXE}" ${common} --mode YMK --out "${WORK}/ymk_default")
+run_tool(0 "${EXE}" ${common} --mode YMK --keyframe-interval 1 --out "${WORK}/ymk_interval_1")
+expect_json("${WORK}/ymk_interval_1/summary.json" 1 mapping_settings keyframe_interval)
+file(READ "${WORK}/ymk_default/keyframes.txt" default_keyframes)
+file(READ "${WORK}/ymk_interval_1/keyframes.txt" keyframes)
+if(keyframes STREQUAL default_keyframes)
+  message(FATAL_ERROR "--keyframe-interval 1 left the keyframes unchanged")
+endif()
+run_tool(2 "${EXE}" ${common} --keyframe-interval 0 --out "${WORK}/ymk_interval_0")
 
 # 2.
 run_tool(0 "${EXE}" ${common} --mode none --loop-scoring bow_only --loop-min-score 0.1 --cge-scaling raw
