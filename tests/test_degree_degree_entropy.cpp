@@ -1397,15 +1397,7 @@ cge::DegreeSumTable single_source_table(const cge::Graph<double>& g) {
 }
 
 cge::DegreeSumTable single_source_table(const cge::Graph<double>& g, TieMode mode) {
-  switch (mode) {
-    case TieMode::all:
-      return single_source_table<TieMode::all>(g);
-    case TieMode::mean:
-      return single_source_table<TieMode::mean>(g);
-    case TieMode::min:
-      break;
-  }
-  return single_source_table<TieMode::min>(g);
+  return cge::detail::with_tie_mode(mode, [&](auto m) { return single_source_table<decltype(m)::value>(g); });
 }
 
 /// The entropy of the nodes whose log weight is within g of the heaviest, from full exponents

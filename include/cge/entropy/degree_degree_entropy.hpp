@@ -107,18 +107,10 @@ class DegreeDegreeEntropy {
     }
     const double log_alpha = std::log(static_cast<double>(settings.alpha));
     const double negligible = settings.negligible_log_weight;
-    detail::WeightBoundedEntropy bounded;
-    switch (settings.ties) {
-      case TieMode::all:
-        bounded = detail::weight_bounded_entropy<TieMode::all>(g, rows ? &*rows : nullptr, c, log_alpha, negligible);
-        break;
-      case TieMode::mean:
-        bounded = detail::weight_bounded_entropy<TieMode::mean>(g, rows ? &*rows : nullptr, c, log_alpha, negligible);
-        break;
-      case TieMode::min:
-        bounded = detail::weight_bounded_entropy<TieMode::min>(g, rows ? &*rows : nullptr, c, log_alpha, negligible);
-        break;
-    }
+    const detail::WeightBoundedEntropy bounded = detail::with_tie_mode(settings.ties, [&](auto mode) {
+      return detail::weight_bounded_entropy<decltype(mode)::value>(g, rows ? &*rows : nullptr, c, log_alpha,
+                                                                    negligible);
+    });
     return entropy_result(bounded.entropy_bits, g.num_nodes(), d.diameter, d.components == 1,
                           bounded.exponents_evaluated);
   }

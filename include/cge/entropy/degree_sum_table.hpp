@@ -3,6 +3,7 @@
 // and which implementation of the sweep runs.
 
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 namespace cge {
@@ -13,6 +14,25 @@ enum class TieMode {
   mean,  ///< one averaged path per end node: the mean sum over its shortest paths
   min,   ///< one path per end node: the shortest path with the smallest sum
 };
+
+namespace detail {
+
+/// Calls f(std::integral_constant<TieMode, ties>{}): the run-time tie mode as a compile-time one,
+/// for the kernels that are templates on it.
+template <typename F>
+decltype(auto) with_tie_mode(TieMode ties, F&& f) {
+  switch (ties) {
+    case TieMode::all:
+      return f(std::integral_constant<TieMode, TieMode::all>{});
+    case TieMode::mean:
+      return f(std::integral_constant<TieMode, TieMode::mean>{});
+    case TieMode::min:
+      break;
+  }
+  return f(std::integral_constant<TieMode, TieMode::min>{});
+}
+
+}  // namespace detail
 
 /// Which implementation of the all-sources sweep computes the table. Every kernel gives the same
 /// table, bit for bit: the choice changes only the speed.

@@ -102,17 +102,7 @@ DegreeSumTable shortest_path_degree_sums(const Graph<Scalar>& g, TieMode ties = 
                           (kernel == DegreeSumKernel::automatic && detail::avx512_degree_sums_supported());
   DegreeSumTable table;
   table.num_nodes = g.num_nodes();
-  switch (ties) {
-    case TieMode::all:
-      detail::fill_table<TieMode::all>(g, table, use_avx512);
-      break;
-    case TieMode::mean:
-      detail::fill_table<TieMode::mean>(g, table, use_avx512);
-      break;
-    case TieMode::min:
-      detail::fill_table<TieMode::min>(g, table, use_avx512);
-      break;
-  }
+  detail::with_tie_mode(ties, [&](auto mode) { detail::fill_table<decltype(mode)::value>(g, table, use_avx512); });
   return table;
 }
 
