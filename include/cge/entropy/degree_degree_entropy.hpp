@@ -95,7 +95,7 @@ class DegreeDegreeEntropy {
   template <typename GraphScalar>
   Result compute_index(const Graph<GraphScalar>& g) const {
     validate();
-    if (g.num_nodes() == 0) throw std::invalid_argument("degree-degree entropy: the graph has no nodes");
+    detail::require_nodes(g.num_nodes());
     if (!bounded_search_applies()) return without_exponents(compute(g));
     // Bitset rows serve the diameter's and the index's searches where they pay.
     std::optional<AdjacencyBitsets> rows;
@@ -126,7 +126,7 @@ class DegreeDegreeEntropy {
   Result from_table(const DegreeSumTable& table) const {
     validate();
     const std::int32_t n = table.num_nodes;
-    if (n == 0) throw std::invalid_argument("degree-degree entropy: the graph has no nodes");
+    detail::require_nodes(n);
     const std::int32_t rho = table.diameter;
     const std::vector<double> c = coefficient_table(rho);
 

@@ -3,6 +3,7 @@
 // and which implementation of the sweep runs.
 
 #include <cstdint>
+#include <stdexcept>
 #include <type_traits>
 #include <vector>
 
@@ -16,6 +17,12 @@ enum class TieMode {
 };
 
 namespace detail {
+
+/// The degree-degree entropy is undefined on an empty graph (ALGORITHMS.md section 4): one message
+/// for every entry point.
+inline void require_nodes(std::int32_t num_nodes) {
+  if (num_nodes == 0) throw std::invalid_argument("degree-degree entropy: the graph has no nodes");
+}
 
 /// Calls f(std::integral_constant<TieMode, ties>{}): the run-time tie mode as a compile-time one,
 /// for the kernels that are templates on it.

@@ -92,7 +92,7 @@ void fill_table(const Graph<Scalar>& g, DegreeSumTable& table, bool use_avx512) 
 template <typename Scalar>
 DegreeSumTable shortest_path_degree_sums(const Graph<Scalar>& g, TieMode ties = TieMode::all,
                                          DegreeSumKernel kernel = DegreeSumKernel::automatic) {
-  if (g.num_nodes() == 0) throw std::invalid_argument("degree-degree entropy: the graph has no nodes");
+  detail::require_nodes(g.num_nodes());
   if (!degree_sum_kernel_available(kernel)) {
     throw std::invalid_argument(
         "shortest_path_degree_sums: the avx512 kernel needs an x86-64 CPU with AVX-512 F, BW, VL, VBMI2 and "
