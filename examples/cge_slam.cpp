@@ -92,7 +92,7 @@ struct Options {
   int frames = 0;  // 0: all (dataset) or kDefaultPresetFrames (rendered)
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   int keyframe_interval = cge::PatchKeyframeSettings<double>{}.interval_frames;  // mode YMK: k
-  std::string loop_correction = "pgo+ba";  // none | pgo | pgo+ba
+  std::string loop_correction = "pgo+ba";                                        // none | pgo | pgo+ba
   // Depth term of the tracking refinement (0: pixels only) and local BA (on | off).
   double tracking_depth_sigma = cge::slam::TrackerSettings{}.refinement_depth_sigma_per_m;
   std::string local_ba = cge::slam::LocalMappingSettings{}.bundle_adjustment ? "on" : "off";

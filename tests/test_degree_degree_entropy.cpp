@@ -29,9 +29,9 @@
 #include "cge/entropy/weight_bounded_entropy.hpp"
 #include "cge/graph/adjacency_bitsets.hpp"
 #include "cge/graph/graph.hpp"
+#include "cge/graph/graph_builder.hpp"
 #include "cge/graph/hop_diameter.hpp"
 #include "cge/graph/twin_classes.hpp"
-#include "cge/graph/graph_builder.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -1470,7 +1470,8 @@ TEST_CASE("hop_diameter equals the largest BFS eccentricity, with the component 
   graphs.push_back(star_of_cliques(5, 6));
   for (int i = 0; i < 40; ++i) {
     const int n = std::uniform_int_distribution<int>(2, 200)(rng);
-    graphs.push_back(random_gnp(rng, n, std::uniform_real_distribution<double>(0.005, 0.1)(rng), "d" + std::to_string(i)));
+    graphs.push_back(
+        random_gnp(rng, n, std::uniform_real_distribution<double>(0.005, 0.1)(rng), "d" + std::to_string(i)));
     graphs.push_back(random_connected(rng, n, std::uniform_int_distribution<int>(0, n)(rng), "c" + std::to_string(i)));
   }
   for (const SmallGraph& sg : graphs) {
@@ -1575,7 +1576,8 @@ void require_stopped_runs_match(std::mt19937& rng, const cge::Graph<double>& g, 
     const std::int32_t last = sums.run(s, [&](std::int32_t k, double delta) {
       ++calls;
       REQUIRE(k <= ecc);
-      REQUIRE(std::memcmp(&delta, &ref.values[static_cast<std::size_t>(ref.row_offsets[s] + k - 1)], sizeof delta) == 0);
+      REQUIRE(std::memcmp(&delta, &ref.values[static_cast<std::size_t>(ref.row_offsets[s] + k - 1)], sizeof delta) ==
+              0);
       return k < stop;
     });
     REQUIRE(last == std::min(stop, ecc));
@@ -1583,7 +1585,8 @@ void require_stopped_runs_match(std::mt19937& rng, const cge::Graph<double>& g, 
     std::int32_t full_calls = 0;
     REQUIRE(sums.run(s, [&](std::int32_t k, double delta) {
       ++full_calls;
-      REQUIRE(std::memcmp(&delta, &ref.values[static_cast<std::size_t>(ref.row_offsets[s] + k - 1)], sizeof delta) == 0);
+      REQUIRE(std::memcmp(&delta, &ref.values[static_cast<std::size_t>(ref.row_offsets[s] + k - 1)], sizeof delta) ==
+              0);
       return true;
     }) == ecc);
     REQUIRE(full_calls == ecc);
@@ -1606,7 +1609,8 @@ std::vector<std::vector<int>> all_distances(const SmallGraph& sg) {
     adj[static_cast<std::size_t>(u)].push_back(v);
     adj[static_cast<std::size_t>(v)].push_back(u);
   }
-  std::vector<std::vector<int>> dist(static_cast<std::size_t>(sg.n), std::vector<int>(static_cast<std::size_t>(sg.n), -1));
+  std::vector<std::vector<int>> dist(static_cast<std::size_t>(sg.n),
+                                     std::vector<int>(static_cast<std::size_t>(sg.n), -1));
   for (int s = 0; s < sg.n; ++s) {
     std::vector<int>& d = dist[static_cast<std::size_t>(s)];
     std::vector<int> queue{s};
@@ -1708,7 +1712,8 @@ TEST_CASE("AdjacencyBitsets: the rows are the neighbour sets, and pay on short r
       const cge::AdjacencyBitsets::Span span = rows.span(v);
       for (std::size_t w = span.first; w < span.end; ++w) {
         for (int b = 0; b < 64; ++b) {
-          if ((rows.stored_row(v)[w - span.first] >> b) & 1u) found.insert(static_cast<std::int32_t>(w * 64 + static_cast<std::size_t>(b)));
+          if ((rows.stored_row(v)[w - span.first] >> b) & 1u)
+            found.insert(static_cast<std::int32_t>(w * 64 + static_cast<std::size_t>(b)));
         }
       }
       REQUIRE(found == expected);
@@ -1727,8 +1732,8 @@ TEST_CASE("AdjacencyBitsets: the rows are the neighbour sets, and pay on short r
 namespace {
 
 template <TieMode Mode>
-void require_kernels_agree_on_bounded_entropy(const cge::Graph<double>& g, const std::vector<double>& c,
-                                              double alpha, double cut, int& graphs_with_skips) {
+void require_kernels_agree_on_bounded_entropy(const cge::Graph<double>& g, const std::vector<double>& c, double alpha,
+                                              double cut, int& graphs_with_skips) {
   using cge::detail::BitsetSingleSourceDegreeSums;
   using cge::detail::SingleSourceDegreeSums;
   const double log_alpha = std::log(alpha);
@@ -1773,8 +1778,7 @@ TEST_CASE("weight_bounded_entropy: the same bits with either kernel; other searc
   CHECK(graphs_with_skips > 30);
 }
 
-TEST_CASE("twin_classes: the nodes with equal open or closed neighbourhoods, by pairwise comparison",
-          "[dde][twins]") {
+TEST_CASE("twin_classes: the nodes with equal open or closed neighbourhoods, by pairwise comparison", "[dde][twins]") {
   std::mt19937 rng(2718);
   std::vector<SmallGraph> graphs = small_graph_zoo(150);
   const std::size_t plain = graphs.size();
@@ -1816,7 +1820,8 @@ TEST_CASE("twins have the same exponent in every tie mode (the swap is an automo
       const auto full = cge::DegreeDegreeEntropy<double>(s).compute(g);
       for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
         const double mine = full.exponents[static_cast<std::size_t>(v)];
-        const double theirs = full.exponents[static_cast<std::size_t>(twins.representative[static_cast<std::size_t>(v)])];
+        const double theirs =
+            full.exponents[static_cast<std::size_t>(twins.representative[static_cast<std::size_t>(v)])];
         REQUIRE(mine == Approx(theirs).epsilon(1e-12));
       }
     }

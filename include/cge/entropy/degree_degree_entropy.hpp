@@ -109,7 +109,7 @@ class DegreeDegreeEntropy {
     const double negligible = settings.negligible_log_weight;
     const detail::WeightBoundedEntropy bounded = detail::with_tie_mode(settings.ties, [&](auto mode) {
       return detail::weight_bounded_entropy<decltype(mode)::value>(g, rows ? &*rows : nullptr, c, log_alpha,
-                                                                    negligible);
+                                                                   negligible);
     });
     return entropy_result(bounded.entropy_bits, g.num_nodes(), d.diameter, d.components == 1,
                           bounded.exponents_evaluated);

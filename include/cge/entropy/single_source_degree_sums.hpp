@@ -42,7 +42,7 @@ class SingleSourceLevel {
  protected:
   explicit SingleSourceLevel(std::size_t num_nodes) : count_(num_nodes, 0.0), sum_(num_nodes, 0.0) {}
 
-  std::vector<double> count_, sum_;  // N and S (or M) of the nodes reached
+  std::vector<double> count_, sum_;            // N and S (or M) of the nodes reached
   const std::int32_t* level_nodes_ = nullptr;  // the level of the current on_level call
   std::size_t level_size_ = 0;
 };
@@ -153,8 +153,8 @@ class SingleSourceDegreeSums : public SingleSourceLevel<Mode> {
   const std::int32_t* offsets_;
   const std::int32_t* adjacency_;
   std::vector<double> degree_;
-  std::vector<std::uint32_t> stamp_;  // == generation_: reached by the current run
-  std::vector<std::int32_t> level_;   // distance from the current source, where stamped
+  std::vector<std::uint32_t> stamp_;           // == generation_: reached by the current run
+  std::vector<std::int32_t> level_;            // distance from the current source, where stamped
   std::vector<std::int32_t> frontier_, next_;  // one level each (|V| entries)
   std::uint32_t generation_ = 0;
 };

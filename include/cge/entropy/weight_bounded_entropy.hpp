@@ -79,8 +79,9 @@ inline bool exceeds_cut(double assembled_bound, double cut) {
 /// The search below with a single-source kernel for g (SingleSourceDegreeSums or
 /// BitsetSingleSourceDegreeSums: the same bits, different speeds).
 template <typename Sums, typename Scalar>
-WeightBoundedEntropy weight_bounded_entropy_with(const Graph<Scalar>& g, Sums& sums, const std::vector<double>& coefficients,
-                                                 double log_alpha, double negligible_log_weight) {
+WeightBoundedEntropy weight_bounded_entropy_with(const Graph<Scalar>& g, Sums& sums,
+                                                 const std::vector<double>& coefficients, double log_alpha,
+                                                 double negligible_log_weight) {
   const std::int32_t n = g.num_nodes();
   const std::size_t size = static_cast<std::size_t>(n);
   const TwinClasses twins = twin_classes(g);

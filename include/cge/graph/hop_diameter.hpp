@@ -38,7 +38,8 @@ class ListDistances {
 
   /// distance[w] for every node w of the source's component (members: that component's nodes,
   /// the only entries it resets); returns the source's eccentricity.
-  std::int32_t operator()(std::int32_t source, const std::vector<std::int32_t>& members, std::vector<std::int32_t>& distance) {
+  std::int32_t operator()(std::int32_t source, const std::vector<std::int32_t>& members,
+                          std::vector<std::int32_t>& distance) {
     for (const std::int32_t w : members) distance[static_cast<std::size_t>(w)] = -1;
     distance[static_cast<std::size_t>(source)] = 0;
     queue_.assign(1, source);
@@ -63,7 +64,11 @@ class ListDistances {
 class BitsetDistances {
  public:
   explicit BitsetDistances(const AdjacencyBitsets& rows)
-      : rows_(rows), visited_(rows.words(), 0), next_(rows.words(), 0), frontier_(rows.num_nodes()), level_(rows.num_nodes()) {}
+      : rows_(rows),
+        visited_(rows.words(), 0),
+        next_(rows.words(), 0),
+        frontier_(rows.num_nodes()),
+        level_(rows.num_nodes()) {}
 
   std::int32_t operator()(std::int32_t source, const std::vector<std::int32_t>&, std::vector<std::int32_t>& distance) {
     std::fill(visited_.begin(), visited_.end(), std::uint64_t{0});
