@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <deque>
 #include <exception>
 #include <future>
@@ -60,6 +61,7 @@ struct Options {
   std::string out;
   bool exact_masks = false;
   bool no_depth_noise = false;
+  cge::sim::PresetSettings preset_settings;  // --walking-speed, --pause-s
   std::string error_classes = "person";
   cge::sim::SegmentationErrorSettings errors;
   cge::sim::TumWriterSettings writer;
@@ -79,14 +81,24 @@ void check_preset(const std::string& name) {
 }
 
 std::unique_ptr<cge::sim::FrameSource> open_preset(const std::string& name, int frames, std::uint64_t seed,
-                                                   bool depth_noise) {
+                                                   bool depth_noise, const cge::sim::PresetSettings& settings) {
   using Renderer = cge::sim::SequenceRenderer;
-  cge::sim::SequenceSpec spec = cge::sim::make_preset(name, frames, seed);
+  cge::sim::SequenceSpec spec = cge::sim::make_preset(name, frames, seed, settings);
   spec.render.depth.noise_enabled = depth_noise;
   return std::make_unique<cge::sim::RendererFrameSource<Renderer>>(Renderer(std::move(spec)));
 }
 
 // ---- the rest ----------------------------------------------------------------------------------
+
+/// The shortest of %.15g, %.16g, %.17g that reads back as the same double (a recipe must be exact).
+std::string exact_number(double value) {
+  char buffer[40];
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
+    if (std::strtod(buffer, nullptr) == value) break;
+  }
+  return buffer;
+}
 
 std::vector<int> parse_classes(const std::string& list, bool& all) {
   all = false;
@@ -155,9 +167,15 @@ int run(Options opt) {
     opt.errors.affected_class_ids = parse_classes(opt.error_classes, opt.errors.affect_all_classes);
   }
   cge::sim::validate(opt.errors);
+  const cge::sim::PresetSettings default_preset;
   opt.writer.description = std::string(kProgram) + " --preset " + opt.preset + " --frames " +
                            std::to_string(opt.frames) + " --seed " + std::to_string(opt.seed) +
                            (opt.no_depth_noise ? " --no-depth-noise" : "");
+  // Non-default people motions are part of the sequence's recipe, as the flags that give them.
+  if (opt.preset_settings.walking_speed_mps != default_preset.walking_speed_mps)
+    opt.writer.description += " --walking-speed " + exact_number(opt.preset_settings.walking_speed_mps);
+  if (opt.preset_settings.pause_s != default_preset.pause_s)
+    opt.writer.description += " --pause-s " + exact_number(opt.preset_settings.pause_s);
   check_preset(opt.preset);
   cge::sim::check_output_folder(opt.out, opt.writer.force);
 
@@ -166,7 +184,7 @@ int run(Options opt) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
   const std::unique_ptr<cge::sim::FrameSource> source =
-      open_preset(opt.preset, opt.frames, opt.seed, !opt.no_depth_noise);
+      open_preset(opt.preset, opt.frames, opt.seed, !opt.no_depth_noise, opt.preset_settings);
   const cge::sim::SegmentationErrorModel model(source->instances(), opt.seed, opt.errors);
   cge::sim::WriteProgress progress;
   if (::isatty(::fileno(stderr))) progress = [&](int done, int total) { progress_bar.draw(done, total, elapsed_s()); };
@@ -201,6 +219,14 @@ int main(int argc, char** argv) {
   app.add_flag("--exact-masks", opt.exact_masks, "segmentation/ equal to masks/ (no segmentation errors)");
   app.add_flag("--no-depth-noise", opt.no_depth_noise,
                "depth without the sensor's range noise (still quantised, with its holes and dropouts)");
+  app.add_option("--walking-speed", opt.preset_settings.walking_speed_mps,
+                 "walking presets: speed of the walking people, metres per second")
+      ->check(cge_tool::above_zero())
+      ->capture_default_str();
+  app.add_option("--pause-s", opt.preset_settings.pause_s,
+                 "walking presets: how long the second person stands still at each of its stops, seconds")
+      ->check(cge_tool::at_least_zero())
+      ->capture_default_str();
   app.add_option("--mask-offset-px", opt.errors.boundary_offset_px,
                  "boundary shift of affected masks, pixels: > 0 dilates, < 0 erodes")
       ->capture_default_str();

@@ -173,6 +173,42 @@ TEST_CASE("presets: camera motions have the character of their TUM namesakes", "
   }
 }
 
+TEST_CASE("presets: the second walking person stands still pause_s at each stop, at walking_speed_mps between",
+          "[sim][presets]") {
+  for (const double pause : {0.0, 1.5, 4.0}) {
+    for (const double speed : {0.35, 1.0}) {
+      cge::sim::PresetSettings settings;
+      settings.pause_s = pause;
+      settings.walking_speed_mps = speed;
+      const SequenceSpec spec = cge::sim::make_preset("walking_static", 1800, 4, settings);  // 60 s
+      INFO("pause " << pause << " s, speed " << speed << " m/s");
+      REQUIRE(spec.people.size() == 2);
+      const auto& path = spec.people[1].path;
+      REQUIRE(path.size() > 4);
+      int stops = 0;
+      for (std::size_t i = 1; i < path.size(); ++i) {
+        const double dt = path[i].time_s - path[i - 1].time_s;
+        const double step = (path[i].xy_m - path[i - 1].xy_m).norm();
+        if (step == 0) {  // a stop: stands for exactly the pause
+          CHECK(dt == Approx(pause).margin(1e-12));
+          ++stops;
+        } else {  // a walk between stops, at the walking speed
+          CHECK(step / dt == Approx(speed).epsilon(1e-12));
+        }
+      }
+      CHECK(stops >= 2);
+      // The first person walks its loop at the same speed whatever the pause.
+      const auto a = cge::sim::person_state(spec.people[0], 1.0);
+      const auto b = cge::sim::person_state(spec.people[0], 1.5);
+      CHECK((a.xy_m - b.xy_m).norm() == Approx(0.5 * speed).epsilon(0.05));
+    }
+  }
+  // The defaults are the presets' documented motions.
+  const cge::sim::PresetSettings defaults;
+  CHECK(defaults.pause_s == 1.5);
+  CHECK(defaults.walking_speed_mps == 1.0);
+}
+
 TEST_CASE("presets: loop scenes circle the room and list loops that satisfy the thresholds", "[sim][presets][loops]") {
   cge::sim::PresetSettings settings;
   const int frames = 240;
@@ -267,6 +303,12 @@ TEST_CASE("make_preset: bad input names what is wrong", "[sim][presets][errors]"
   settings.loop_laps = 1;
   CHECK_THAT(cge_test::invalid_argument_message([&] { cge::sim::make_preset("loop_dynamic", 5, 1, settings); }),
              Catch::Contains("loop_laps"));
+  for (const double pause : {-0.5, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    settings = {};
+    settings.pause_s = pause;
+    CHECK_THAT(cge_test::invalid_argument_message([&] { cge::sim::make_preset("walking_xyz", 5, 1, settings); }),
+               Catch::Contains("pause_s"));
+  }
   settings = {};
   settings.render.depth.max_range_m = 0.1;
   CHECK_THAT(cge_test::invalid_argument_message([&] { cge::sim::make_preset("walking_xyz", 5, 1, settings); }),

@@ -387,7 +387,7 @@ Person make_person(SceneBuilder& b, Posture posture) {
 }
 
 /// Two people walking in front of the desks: one round a loop, one back and forth with pauses.
-void add_walking_people(SceneBuilder& b, SequenceSpec& spec, double duration_s, double speed) {
+void add_walking_people(SceneBuilder& b, SequenceSpec& spec, double duration_s, double speed, double pause_s) {
   Rng& r = b.rng();
   Person first = make_person(b, Posture::walking);
   const std::vector<Eigen::Vector2d> loop = {{-1.9, 0.6}, {1.7, 0.6}, {1.9, 1.25}, {-1.7, 1.3}};
@@ -397,7 +397,6 @@ void add_walking_people(SceneBuilder& b, SequenceSpec& spec, double duration_s, 
   // The second person walks to the desks, stops, walks on, stops, and back, pausing at each stop.
   Person second = make_person(b, Posture::walking);
   const std::vector<Eigen::Vector2d> stops = {{2.2, 1.0}, {0.1, 1.45}, {-1.2, 0.4}, {-2.3, 1.5}};
-  const double pause_s = 1.5;
   double t = -r.uniform(0, 10);
   std::size_t i = 0;
   int direction = 1;
@@ -504,6 +503,8 @@ void validate_preset_settings(const PresetSettings& s) {
     throw std::invalid_argument("PresetSettings.start_timestamp_s must be finite");
   if (!positive(s.walking_speed_mps))
     throw std::invalid_argument("PresetSettings.walking_speed_mps must be finite and > 0");
+  if (!(std::isfinite(s.pause_s) && s.pause_s >= 0))
+    throw std::invalid_argument("PresetSettings.pause_s must be finite and >= 0");
   if (s.loop_laps < 2) {
     throw std::invalid_argument("PresetSettings.loop_laps must be >= 2 (got " + std::to_string(s.loop_laps) + ")");
   }
@@ -565,7 +566,7 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
     if (name == "sitting_xyz") {
       add_sitting_people(builder, spec);
     } else {
-      add_walking_people(builder, spec, duration_s, settings.walking_speed_mps);
+      add_walking_people(builder, spec, duration_s, settings.walking_speed_mps, settings.pause_s);
     }
   } else {
     const int laps = settings.loop_laps;

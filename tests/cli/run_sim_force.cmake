@@ -5,6 +5,8 @@
 # 3. with --force it writes the sequence and the user's file is still there, unchanged;
 # 4. both runs wrote the same bytes in every file of the sequence;
 # 5. --no-depth-noise changes the depth images only (and says so in the text files' header).
+# 6. --walking-speed and --pause-s change the people (masks) and are recorded; their defaults given
+#    explicitly change nothing; a negative pause is refused (exit 2).
 cmake_minimum_required(VERSION 3.16)
 
 foreach(var EXE WORK)
@@ -88,3 +90,32 @@ file(READ "${WORK}/no_noise/depth.txt" header)
 if(NOT header MATCHES "--no-depth-noise")
   message(FATAL_ERROR "depth.txt does not record --no-depth-noise:\n${header}")
 endif()
+
+# 6. --walking-speed and --pause-s move the people: other masks, the header records both flags;
+#    with the defaults given explicitly, the bytes of the default run and a header without them.
+run_sim(0 --out "${WORK}/slow_people" --walking-speed 0.35 --pause-s 4)
+file(GLOB mask_images RELATIVE "${WORK}/fresh" "${WORK}/fresh/masks/*.png")
+set(masks_changed 0)
+foreach(name IN LISTS mask_images)
+  file(SHA256 "${WORK}/fresh/${name}" a)
+  file(SHA256 "${WORK}/slow_people/${name}" b)
+  if(NOT a STREQUAL b)
+    math(EXPR masks_changed "${masks_changed} + 1")
+  endif()
+endforeach()
+if(masks_changed EQUAL 0)
+  message(FATAL_ERROR "--walking-speed 0.35 --pause-s 4 changed no person mask")
+endif()
+file(READ "${WORK}/slow_people/rgb.txt" header)
+if(NOT header MATCHES "--walking-speed 0\\.35 --pause-s 4")
+  message(FATAL_ERROR "rgb.txt does not record --walking-speed 0.35 --pause-s 4:\n${header}")
+endif()
+run_sim(0 --out "${WORK}/explicit_defaults" --walking-speed 1 --pause-s 1.5)
+foreach(name IN LISTS written)
+  file(SHA256 "${WORK}/fresh/${name}" a)
+  file(SHA256 "${WORK}/explicit_defaults/${name}" b)
+  if(NOT a STREQUAL b)
+    message(FATAL_ERROR "${name} differs with the default people motions given explicitly")
+  endif()
+endforeach()
+run_sim(2 --out "${WORK}/bad_pause" --pause-s -1)

@@ -34,6 +34,9 @@ struct PresetSettings {
   double frame_rate_hz = 30;       ///< as TUM, > 0
   double start_timestamp_s = 0;    ///< timestamp of frame 0, seconds
   double walking_speed_mps = 1.0;  ///< speed of walking people, metres per second, > 0
+  /// Walking presets: how long the second person stands still at each of its stops, seconds, >= 0
+  /// (long pauses let a person enter a map as static before walking on).
+  double pause_s = 1.5;
   int loop_laps = 3;               ///< loop scenes: laps of the room, >= 2
   double loop_radius_m = 1.1;      ///< loop scenes: radius of the camera's circle, metres, in (0, 1.6]
   double crossing_time_s = 3.0;    ///< loop_dynamic: time the pedestrian takes to cross, seconds, > 0
