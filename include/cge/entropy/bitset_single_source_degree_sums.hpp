@@ -70,9 +70,9 @@ class BitsetSingleSourceDegreeSums : public SingleSourceLevel<Mode> {
     frontier[0] = source;
     std::size_t frontier_size = 1;
     for (std::int32_t k = 1;; ++k) {
-      // Words the frontier occupies (its nodes are ascending) and those its neighbours can occupy.
-      const std::size_t frontier_first = static_cast<std::size_t>(frontier[0]) / 64;
-      const std::size_t frontier_end = static_cast<std::size_t>(frontier[frontier_size - 1]) / 64 + 1;
+      // Words the frontier occupies and those its neighbours can occupy.
+      const AdjacencyBitsets::Span occupied = words_of(frontier, frontier_size);
+      const std::size_t frontier_first = occupied.first, frontier_end = occupied.end;
       const AdjacencyBitsets::Span touched = rows_.or_rows(frontier, frontier_size, next_bits);
       const std::size_t next_first = touched.first, next_end = touched.end;
       std::uint64_t any = 0;
@@ -136,15 +136,19 @@ class BitsetSingleSourceDegreeSums : public SingleSourceLevel<Mode> {
       this->level_nodes_ = frontier;
       this->level_size_ = frontier_size;
       if (!on_level(k, layer)) {
-        const std::size_t level_first = static_cast<std::size_t>(frontier[0]) / 64;
-        const std::size_t level_end = static_cast<std::size_t>(frontier[frontier_size - 1]) / 64 + 1;
-        std::fill(frontier_bits + level_first, frontier_bits + level_end, std::uint64_t{0});
+        const AdjacencyBitsets::Span level = words_of(frontier, frontier_size);
+        std::fill(frontier_bits + level.first, frontier_bits + level.end, std::uint64_t{0});
         return k;
       }
     }
   }
 
  private:
+  /// The words that hold the bits of nodes[0 .. count), ascending and count >= 1.
+  static AdjacencyBitsets::Span words_of(const std::int32_t* nodes, std::size_t count) {
+    return {static_cast<std::size_t>(nodes[0]) / 64, static_cast<std::size_t>(nodes[count - 1]) / 64 + 1};
+  }
+
   const AdjacencyBitsets& rows_;
   std::vector<double> degree_;
   std::vector<std::uint64_t> visited_, frontier_bits_, next_bits_;

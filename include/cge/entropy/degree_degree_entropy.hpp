@@ -98,8 +98,7 @@ class DegreeDegreeEntropy {
     detail::require_nodes(g.num_nodes());
     if (!bounded_search_applies()) return without_exponents(compute(g));
     // Bitset rows serve the diameter's and the index's searches where they pay.
-    std::optional<AdjacencyBitsets> rows;
-    if (AdjacencyBitsets::rows_pay(g)) rows.emplace(g);
+    const std::optional<AdjacencyBitsets> rows = AdjacencyBitsets::if_rows_pay(g);
     const HopDiameter d = rows ? hop_diameter(g, *rows) : hop_diameter(g);
     const std::vector<double> c = coefficient_table(d.diameter);
     for (std::size_t k = 1; k < c.size(); ++k) {

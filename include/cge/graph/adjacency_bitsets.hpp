@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "cge/graph/graph.hpp"
@@ -27,24 +29,14 @@ class AdjacencyBitsets {
   AdjacencyBitsets() = default;
 
   template <typename Scalar>
-  explicit AdjacencyBitsets(const Graph<Scalar>& g)
-      : words_((static_cast<std::size_t>(g.num_nodes()) + 63) / 64),
-        spans_(static_cast<std::size_t>(g.num_nodes())),
-        offset_(static_cast<std::size_t>(g.num_nodes()), 0) {
-    std::size_t stored = 0;
-    for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
-      const std::size_t sv = static_cast<std::size_t>(v);
-      spans_[sv] = row_span(g, v);
-      offset_[sv] = stored;
-      stored += spans_[sv].end - spans_[sv].first;
-    }
-    bits_.assign(stored, 0);
-    for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
-      const std::size_t sv = static_cast<std::size_t>(v);
-      for (const std::int32_t u : g.neighbors(v)) {
-        bits_[offset_[sv] + static_cast<std::size_t>(u) / 64 - spans_[sv].first] |= bit(u);
-      }
-    }
+  explicit AdjacencyBitsets(const Graph<Scalar>& g) : AdjacencyBitsets(g, spans_of(g)) {}
+
+  /// g's rows where they pay (rows_pay), else nothing; the spans are found once for both.
+  template <typename Scalar>
+  static std::optional<AdjacencyBitsets> if_rows_pay(const Graph<Scalar>& g) {
+    std::vector<Span> spans = spans_of(g);
+    if (!spans_pay(spans, g.num_edges())) return std::nullopt;
+    return AdjacencyBitsets(g, std::move(spans));
   }
 
   /// Words of a full row: one bit per node.
@@ -97,15 +89,42 @@ class AdjacencyBitsets {
   /// the cost per word (docs/BENCHMARK.md).
   template <typename Scalar>
   static bool rows_pay(const Graph<Scalar>& g) {
-    std::int64_t span_words = 0;
-    for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
-      const Span s = row_span(g, v);
-      span_words += static_cast<std::int64_t>(s.end - s.first);
-    }
-    return g.num_nodes() > 0 && span_words <= 2 * static_cast<std::int64_t>(g.num_edges());
+    return spans_pay(spans_of(g), g.num_edges());
   }
 
  private:
+  template <typename Scalar>
+  AdjacencyBitsets(const Graph<Scalar>& g, std::vector<Span> spans)
+      : words_((static_cast<std::size_t>(g.num_nodes()) + 63) / 64),
+        spans_(std::move(spans)),
+        offset_(spans_.size(), 0) {
+    std::size_t stored = 0;
+    for (std::size_t v = 0; v < spans_.size(); ++v) {
+      offset_[v] = stored;
+      stored += spans_[v].end - spans_[v].first;
+    }
+    bits_.assign(stored, 0);
+    for (std::int32_t v = 0; v < g.num_nodes(); ++v) {
+      const std::size_t sv = static_cast<std::size_t>(v);
+      for (const std::int32_t u : g.neighbors(v)) {
+        bits_[offset_[sv] + static_cast<std::size_t>(u) / 64 - spans_[sv].first] |= bit(u);
+      }
+    }
+  }
+
+  template <typename Scalar>
+  static std::vector<Span> spans_of(const Graph<Scalar>& g) {
+    std::vector<Span> spans(static_cast<std::size_t>(g.num_nodes()));
+    for (std::int32_t v = 0; v < g.num_nodes(); ++v) spans[static_cast<std::size_t>(v)] = row_span(g, v);
+    return spans;
+  }
+
+  static bool spans_pay(const std::vector<Span>& spans, std::int64_t num_edges) {
+    std::int64_t span_words = 0;
+    for (const Span& s : spans) span_words += static_cast<std::int64_t>(s.end - s.first);
+    return !spans.empty() && span_words <= 2 * num_edges;
+  }
+
   std::size_t words_ = 0;
   std::vector<Span> spans_;
   std::vector<std::size_t> offset_;  // v's stored words start at bits_[offset_[v]]
