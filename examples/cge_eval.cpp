@@ -137,16 +137,6 @@ m::Trajectory read_trajectory(const std::string& path, const Options& opt) {
   return t;
 }
 
-/// The shortest of "%.15g", "%.16g", "%.17g" that reads back as `value` ("-inf" for -infinity).
-std::string round_trip_number(double value) {
-  char buf[64];
-  for (const int digits : {15, 16, 17}) {
-    std::snprintf(buf, sizeof buf, "%.*g", digits, value);
-    if (std::strtod(buf, nullptr) == value) break;
-  }
-  return buf;
-}
-
 /// Refuses an existing `path` unless `force` (UsageError naming the flag).
 void check_writable(const std::string& path, const char* flag, bool force) {
   std::error_code ec;
@@ -328,9 +318,9 @@ Values run_loops(const Options& opt, nlohmann::ordered_json& inputs) {
     write_file(opt.curve, [&](std::ostream& f) {
       f << "threshold,detections,correct_detections,precision,query_recall,event_recall\n";
       for (const m::LoopCurvePoint& p : curve) {
-        f << round_trip_number(p.threshold) << ',' << p.evaluation.detections << ',' << p.evaluation.correct_detections
-          << ',' << number(p.evaluation.precision) << ',' << number(p.evaluation.query_recall) << ','
-          << number(p.evaluation.event_recall) << '\n';
+        f << cge_tool::round_trip_number(p.threshold) << ',' << p.evaluation.detections << ','
+          << p.evaluation.correct_detections << ',' << number(p.evaluation.precision) << ','
+          << number(p.evaluation.query_recall) << ',' << number(p.evaluation.event_recall) << '\n';
       }
     });
   }

@@ -11,7 +11,6 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <deque>
 #include <exception>
 #include <future>
@@ -90,16 +89,6 @@ std::unique_ptr<cge::sim::FrameSource> open_preset(const std::string& name, int 
 
 // ---- the rest ----------------------------------------------------------------------------------
 
-/// The shortest of %.15g, %.16g, %.17g that reads back as the same double (a recipe must be exact).
-std::string exact_number(double value) {
-  char buffer[40];
-  for (int digits = 15; digits <= 17; ++digits) {
-    std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
-    if (std::strtod(buffer, nullptr) == value) break;
-  }
-  return buffer;
-}
-
 std::vector<int> parse_classes(const std::string& list, bool& all) {
   all = false;
   std::vector<int> ids;
@@ -173,9 +162,9 @@ int run(Options opt) {
                            (opt.no_depth_noise ? " --no-depth-noise" : "");
   // Non-default people motions are part of the sequence's recipe, as the flags that give them.
   if (opt.preset_settings.walking_speed_mps != default_preset.walking_speed_mps)
-    opt.writer.description += " --walking-speed " + exact_number(opt.preset_settings.walking_speed_mps);
+    opt.writer.description += " --walking-speed " + cge_tool::round_trip_number(opt.preset_settings.walking_speed_mps);
   if (opt.preset_settings.pause_s != default_preset.pause_s)
-    opt.writer.description += " --pause-s " + exact_number(opt.preset_settings.pause_s);
+    opt.writer.description += " --pause-s " + cge_tool::round_trip_number(opt.preset_settings.pause_s);
   check_preset(opt.preset);
   cge::sim::check_output_folder(opt.out, opt.writer.force);
 

@@ -64,6 +64,17 @@ inline bool standard_output_written(const char* program) {
   return false;
 }
 
+/// The shortest of "%.15g", "%.16g", "%.17g" that reads back as `value` ("-inf" for -infinity):
+/// numbers the tools write for reading back (CSV columns, a recipe's flags).
+inline std::string round_trip_number(double value) {
+  char buf[64];
+  for (const int digits : {15, 16, 17}) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, value);
+    if (std::strtod(buf, nullptr) == value) break;
+  }
+  return buf;
+}
+
 /// Option checks with short messages ("must be >= 0, got -2"); CLI11's own NonNegativeNumber and
 /// PositiveNumber print the range with the largest double written out in full. A value that is not
 /// a number passes through to CLI11's conversion, which reports it.

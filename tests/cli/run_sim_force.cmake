@@ -34,6 +34,14 @@ function(count_differing out_var dir_a dir_b)
   set(${out_var} ${differing} PARENT_SCOPE)
 endfunction()
 
+# Fails unless the text file `name` of folder `dir` matches `pattern` (its header records a flag).
+function(require_recorded dir name pattern)
+  file(READ "${dir}/${name}" header)
+  if(NOT header MATCHES "${pattern}")
+    message(FATAL_ERROR "${name} in ${dir} does not record ${pattern}:\n${header}")
+  endif()
+endfunction()
+
 function(run_sim expected_rc)
   execute_process(COMMAND "${EXE}" ${args} ${ARGN} INPUT_FILE "${CMAKE_CURRENT_LIST_DIR}/empty.txt"
                   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 300)
@@ -89,10 +97,7 @@ list(LENGTH depth_images depth_count)
 if(NOT depth_changed EQUAL depth_count OR depth_count EQUAL 0)
   message(FATAL_ERROR "--no-depth-noise changed ${depth_changed} of ${depth_count} depth images, expected all")
 endif()
-file(READ "${WORK}/no_noise/depth.txt" header)
-if(NOT header MATCHES "--no-depth-noise")
-  message(FATAL_ERROR "depth.txt does not record --no-depth-noise:\n${header}")
-endif()
+require_recorded("${WORK}/no_noise" depth.txt "--no-depth-noise")
 
 # 6. --walking-speed and --pause-s move the people: other masks, the header records both flags;
 #    with the defaults given explicitly, the bytes of the default run and a header without them.
@@ -102,10 +107,7 @@ count_differing(masks_changed "${WORK}/fresh" "${WORK}/slow_people" ${mask_image
 if(masks_changed EQUAL 0)
   message(FATAL_ERROR "--walking-speed 0.35 --pause-s 4 changed no person mask")
 endif()
-file(READ "${WORK}/slow_people/rgb.txt" header)
-if(NOT header MATCHES "--walking-speed 0\\.35 --pause-s 4")
-  message(FATAL_ERROR "rgb.txt does not record --walking-speed 0.35 --pause-s 4:\n${header}")
-endif()
+require_recorded("${WORK}/slow_people" rgb.txt "--walking-speed 0\\.35 --pause-s 4")
 run_sim(0 --out "${WORK}/explicit_defaults" --walking-speed 1 --pause-s 1.5)
 count_differing(defaults_changed "${WORK}/fresh" "${WORK}/explicit_defaults" ${written})
 if(NOT defaults_changed EQUAL 0)
