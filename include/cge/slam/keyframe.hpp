@@ -27,11 +27,22 @@ struct Keyframe {
 
   // ---- features (all detected keypoints, dynamic ones included, so the graph builder sees the same
   //      point set the filter saw; use `labels` to pick the static ones) --------------------------------
-  std::vector<cv::KeyPoint> keypoints;           ///< pixel positions, octave, angle
+  std::vector<cv::KeyPoint> keypoints;           ///< pixel positions as detected (distorted image), octave, angle
+  /// Keypoint positions in the ideal pinhole camera (lens distortion removed), pixels: what every
+  /// geometric step uses (projection matching, PnP, bundle adjustment, triangulation). Equal to
+  /// keypoints[i].pt when the camera has no distortion.
+  std::vector<cv::Point2f> undistorted_px;
   cv::Mat descriptors;                           ///< CV_8UC1, one 32-byte ORB row per keypoint
   std::vector<FeatureLabel> labels;              ///< static / dynamic_by_mask / dynamic_by_mad
   std::vector<Eigen::Vector3d> points_camera_m;  ///< back-projected from depth; NaN where no valid depth
   std::vector<std::int64_t> map_point_ids;       ///< the map point each keypoint observes, -1 if none
+
+  // ---- culling (map maintenance) -------------------------------------------------------------------
+  /// Culled as redundant: it observes no map point any more and its pose follows `parent` (the
+  /// culled keyframe's pose is parent's pose times T_parent_camera, see Map::keyframe_pose).
+  bool culled = false;
+  int parent = -1;  ///< the keyframe this one's pose is kept relative to once culled
+  Eigen::Isometry3d T_parent_camera = Eigen::Isometry3d::Identity();
 
   // ---- semantics ---------------------------------------------------------------------------------
   std::vector<SemanticInstance<double>> instances;  ///< every segmented instance, dynamic flag set
