@@ -6,3 +6,4 @@
 #include "cge/opencv/keypoint.hpp"
 #include "cge/opencv/mask.hpp"
 #include "cge/opencv/pixel_box.hpp"
+#include "cge/opencv/undistort.hpp"

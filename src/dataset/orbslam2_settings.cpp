@@ -107,8 +107,6 @@ class KeyReader {
 
 }  // namespace
 
-cv::Mat LensDistortion::coefficients() const { return (cv::Mat_<double>(1, 5) << k1, k2, p1, p2, k3); }
-
 cv::Mat OrbSlam2Settings::camera_matrix() const {
   return (cv::Mat_<double>(3, 3) << camera.fx_px, 0, camera.cx_px, 0, camera.fy_px, camera.cy_px, 0, 0, 1);
 }
@@ -181,16 +179,7 @@ OrbSlam2Settings read_orbslam2_settings(const fs::path& file) {
 
 std::vector<cv::Point2f> undistort_points(const std::vector<cv::Point2f>& points_px, const OrbSlam2Settings& settings,
                                           const UndistortSettings& undistort) {
-  if (settings.distortion.is_zero() || points_px.empty()) return points_px;
-  if (undistort.max_iterations < 1 || !(undistort.epsilon >= 0)) {
-    throw std::invalid_argument("UndistortSettings: max_iterations must be >= 1 and epsilon >= 0");
-  }
-  std::vector<cv::Point2f> out;
-  const cv::Mat K = settings.camera_matrix();
-  cv::undistortPoints(
-      points_px, out, K, settings.distortion.coefficients(), cv::noArray(), K,
-      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, undistort.max_iterations, undistort.epsilon));
-  return out;
+  return opencv::undistort_pixels(points_px, settings.camera, settings.distortion, undistort);
 }
 
 std::vector<cv::KeyPoint> undistort_keypoints(const std::vector<cv::KeyPoint>& keypoints,

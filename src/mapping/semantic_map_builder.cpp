@@ -1,5 +1,7 @@
 #include "cge/mapping/semantic_map_builder.hpp"
 
+#include "cge/opencv/undistort.hpp"
+
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -35,12 +37,37 @@ void check_image(const cv::Mat& m, int type, const cv::Size& size, const slam::K
 
 }  // namespace
 
-SemanticMapBuilder::SemanticMapBuilder(const PinholeIntrinsics<double>& intrinsics, const SemanticMapSettings& settings)
-    : intrinsics_(intrinsics), settings_(settings), octree_((check_settings(settings), settings.octree)) {
+SemanticMapBuilder::SemanticMapBuilder(const PinholeIntrinsics<double>& intrinsics, const SemanticMapSettings& settings,
+                                       const LensDistortion& distortion)
+    : intrinsics_(intrinsics),
+      distortion_(distortion),
+      settings_(settings),
+      octree_((check_settings(settings), settings.octree)) {
+  if (!distortion.is_finite()) throw std::invalid_argument("SemanticMapBuilder: distortion coefficients must be finite");
   if (!(std::isfinite(intrinsics.fx_px) && intrinsics.fx_px > 0 && std::isfinite(intrinsics.fy_px) &&
         intrinsics.fy_px > 0 && std::isfinite(intrinsics.cx_px) && std::isfinite(intrinsics.cy_px))) {
     throw std::invalid_argument("SemanticMapBuilder: intrinsics must be finite with fx, fy > 0");
   }
+}
+
+const cv::Mat& SemanticMapBuilder::undistorted_rays(cv::Size size) const {
+  if (rays_.size() == size) return rays_;
+  std::vector<cv::Point2f> pixels;
+  pixels.reserve(static_cast<std::size_t>(size.area()));
+  for (int v = 0; v < size.height; ++v) {
+    for (int u = 0; u < size.width; ++u) pixels.emplace_back(static_cast<float>(u), static_cast<float>(v));
+  }
+  const std::vector<cv::Point2f> ideal = opencv::undistort_pixels(pixels, intrinsics_, distortion_);
+  rays_.create(size, CV_32FC2);
+  for (int v = 0; v < size.height; ++v) {
+    auto* row = rays_.ptr<cv::Vec2f>(v);
+    for (int u = 0; u < size.width; ++u) {
+      const cv::Point2f& p = ideal[static_cast<std::size_t>(v * size.width + u)];
+      row[u] = cv::Vec2f(static_cast<float>((p.x - intrinsics_.cx_px) / intrinsics_.fx_px),
+                         static_cast<float>((p.y - intrinsics_.cy_px) / intrinsics_.fy_px));
+    }
+  }
+  return rays_;
 }
 
 std::vector<SemanticPoint> SemanticMapBuilder::keyframe_points(const slam::Keyframe& kf, bool octree_grid) const {
@@ -75,6 +102,7 @@ void SemanticMapBuilder::back_project(const slam::Keyframe& kf, int stride, std:
   const float fx = static_cast<float>(intrinsics_.fx_px), fy = static_cast<float>(intrinsics_.fy_px);
   const float cx = static_cast<float>(intrinsics_.cx_px), cy = static_cast<float>(intrinsics_.cy_px);
   const float max_range = static_cast<float>(settings_.max_range_m);
+  const cv::Mat* rays = distortion_.is_zero() ? nullptr : &undistorted_rays(size);
   const cv::Mat leave_out = !has_mask ? cv::Mat()
                             : settings_.grow_dynamic_mask
                                 ? dynamic_region(kf.dynamic_mask, kf.depth_m, settings_.dynamic_region)
@@ -89,11 +117,14 @@ void SemanticMapBuilder::back_project(const slam::Keyframe& kf, int stride, std:
     const std::uint16_t* labels = has_labels ? kf.class_labels.ptr<std::uint16_t>(v) : nullptr;
     const std::uint8_t* mask = has_mask ? leave_out.ptr<std::uint8_t>(v) : nullptr;
     const cv::Vec3b* bgr = has_bgr ? kf.bgr.ptr<cv::Vec3b>(v) : nullptr;
+    const cv::Vec2f* ray = rays ? rays->ptr<cv::Vec2f>(v) : nullptr;
     for (int u = 0; u < size.width; u += stride) {
       const float z = depth[u];
       if (!(z > 0 && z <= max_range)) continue;  // also drops NaN
       if (mask && mask[u] != 0) continue;
-      const Eigen::Vector3f p_camera((static_cast<float>(u) - cx) * z / fx, (static_cast<float>(v) - cy) * z / fy, z);
+      const Eigen::Vector3f p_camera = ray ? Eigen::Vector3f(ray[u][0] * z, ray[u][1] * z, z)
+                                           : Eigen::Vector3f((static_cast<float>(u) - cx) * z / fx,
+                                                             (static_cast<float>(v) - cy) * z / fy, z);
       SemanticPoint p;
       p.position_m = R * p_camera + t;
       p.class_label = labels ? labels[u] : std::uint16_t(0);

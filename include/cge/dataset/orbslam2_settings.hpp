@@ -23,19 +23,15 @@
 
 #include <opencv2/core.hpp>
 
+#include "cge/core/lens_distortion.hpp"
 #include "cge/core/pinhole_intrinsics.hpp"
+#include "cge/opencv/undistort.hpp"
 
 namespace cge {
 namespace dataset {
 
-/// OpenCV's radial-tangential distortion (k1, k2, p1, p2, k3), unitless.
-struct LensDistortion {
-  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
-
-  bool is_zero() const { return k1 == 0 && k2 == 0 && p1 == 0 && p2 == 0 && k3 == 0; }
-  /// 1 x 5 CV_64F (k1, k2, p1, p2, k3), the order cv::undistortPoints takes.
-  cv::Mat coefficients() const;
-};
+/// OpenCV's radial-tangential distortion (k1, k2, p1, p2, k3), unitless (cge/core/lens_distortion.hpp).
+using LensDistortion = cge::LensDistortion;
 
 /// ORB extractor settings (ORBextractor.*).
 struct OrbExtractorSettings {
@@ -78,10 +74,7 @@ struct OrbSlam2Settings {
 OrbSlam2Settings read_orbslam2_settings(const std::filesystem::path& file);
 
 /// How keypoints are undistorted (cv::undistortPoints' iteration).
-struct UndistortSettings {
-  int max_iterations = 20;  ///< iterations of the fixed-point inversion of the distortion
-  double epsilon = 1e-9;    ///< the iteration stops earlier when its step is below this (normalised units)
-};
+using UndistortSettings = cge::opencv::UndistortSettings;
 
 /// The pixels of an ideal pinhole camera (same intrinsics, no distortion) that the given distorted
 /// pixels correspond to. Returns the input unchanged when the distortion is zero.

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "cge/core/lens_distortion.hpp"
 #include "cge/core/pinhole_intrinsics.hpp"
 #include "cge/mapping/map_dynamic_region.hpp"
 #include "cge/mapping/map_voxel.hpp"
@@ -67,7 +68,10 @@ struct MapFigures {
 
 class SemanticMapBuilder {
  public:
-  SemanticMapBuilder(const PinholeIntrinsics<double>& intrinsics, const SemanticMapSettings& settings = {});
+  /// `distortion`: the colour camera's lens distortion (the depth image is registered to it); each
+  /// pixel is back-projected along its undistorted ray.
+  SemanticMapBuilder(const PinholeIntrinsics<double>& intrinsics, const SemanticMapSettings& settings = {},
+                     const LensDistortion& distortion = {});
 
   /// Adds one keyframe to the cloud and the octree. Throws std::invalid_argument naming the
   /// keyframe id and the image when an image has the wrong type or size or the pose is not finite.
@@ -103,7 +107,13 @@ class SemanticMapBuilder {
   void back_project(const slam::Keyframe& keyframe, int stride, std::vector<SemanticPoint>& points,
                     std::vector<Eigen::Vector3f>* octree_positions, std::vector<std::uint16_t>* octree_labels) const;
 
+  /// Per pixel of an image of `size`, the undistorted normalised ray ((u - cx) / fx, (v - cy) / fy)
+  /// as CV_32FC2; computed once per image size (only with distortion).
+  const cv::Mat& undistorted_rays(cv::Size size) const;
+
   PinholeIntrinsics<double> intrinsics_;
+  LensDistortion distortion_;
+  mutable cv::Mat rays_;  ///< cache of undistorted_rays(); not thread-safe, like the rest of the builder
   SemanticMapSettings settings_;
   octomap_adapter::SemanticOctree octree_;
   std::vector<SemanticPoint> filtered_points_;  ///< per-keyframe filtered points, in insertion order
