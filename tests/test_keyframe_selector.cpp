@@ -1014,9 +1014,20 @@ Summary tracked(std::int64_t id, int points) {
   s.tracked_points = points;
   return s;  // no patch counts: the baseline does not read them
 }
+/// The baseline with one ratio throughout and a keyframe at least every max_gap frames (the
+/// monocular ratio and our max-gap extension), which the tests below use to isolate each rule.
 OrbSettings orb_settings(int max_gap = 1000) {
   OrbSettings s;
   s.max_frame_gap = max_gap;
+  s.reference_ratio = 0.9;
+  s.first_reference_ratio = 0.9;
+  s.use_max_frame_gap = true;
+  return s;
+}
+Summary tracked_close(std::int64_t id, int points, int close_tracked, int close_untracked) {
+  Summary s = tracked(id, points);
+  s.tracked_close_points = close_tracked;
+  s.untracked_close_points = close_untracked;
   return s;
 }
 }  // namespace
@@ -1037,6 +1048,48 @@ TEST_CASE("ORB-SLAM2 baseline: tracked points under 90% of the reference keyfram
   require_insert(orb.step(tracked(5, 152)), Rule::tracked_ratio, 5);
   REQUIRE(orb.pending_ids().empty());
   REQUIRE_FALSE(orb.step(tracked(6, 152)).keep_current);
+}
+
+TEST_CASE("ORB-SLAM2 baseline: the RGB-D defaults (0.4 with one keyframe, then 0.75, no max-gap insertion)",
+          "[keyframe][orbslam2]") {
+  OrbSettings defaults;
+  REQUIRE(defaults.reference_ratio == 0.75);
+  REQUIRE(defaults.first_reference_ratio == 0.4);
+  REQUIRE(defaults.max_frame_gap == 30);
+  REQUIRE(defaults.min_tracked_points == 15);
+  REQUIRE_FALSE(defaults.use_max_frame_gap);
+  Orb orb(defaults);
+  require_insert(orb.step(tracked(0, 0)), Rule::first_frame, 0);
+  orb.set_reference_tracked_points(400);
+  // One keyframe in the map: the line is 0.4 x 400 = 160.
+  require_none(orb.step(tracked(1, 160)));
+  require_insert(orb.step(tracked(2, 159)), Rule::tracked_ratio, 2);
+  orb.set_reference_tracked_points(200);
+  // Two keyframes: 0.75 x 200 = 150.
+  require_none(orb.step(tracked(3, 150)));
+  require_insert(orb.step(tracked(4, 149)), Rule::tracked_ratio, 4);
+  orb.set_reference_tracked_points(200);
+  // c1a alone never inserts: 100 frames with every point tracked.
+  for (std::int64_t i = 5; i < 105; ++i) require_none(orb.step(tracked(i, 200)));
+}
+
+TEST_CASE("ORB-SLAM2 baseline: the close-point rule", "[keyframe][orbslam2]") {
+  Orb orb{OrbSettings{}};
+  orb.step(tracked(0, 0));
+  orb.set_reference_tracked_points(200);
+  // Tracking is fine by the ratio (190 of 200), but few close points are tracked and many are not.
+  require_insert(orb.step(tracked_close(1, 190, 99, 71)), Rule::close_points, 1);
+  orb.set_reference_tracked_points(200);
+  require_none(orb.step(tracked_close(2, 190, 100, 71)));  // 100 tracked close points: enough
+  require_none(orb.step(tracked_close(3, 190, 99, 70)));   // 70 untracked: not more than 70
+  require_none(orb.step(tracked_close(4, 190, -1, -1)));   // not counted: the rule is off
+  require_none(orb.step(tracked_close(5, 15, 0, 500)));    // c2 needs more than 15 tracked points
+  OrbSettings off;
+  off.use_close_points = false;
+  Orb without(off);
+  without.step(tracked(0, 0));
+  without.set_reference_tracked_points(200);
+  require_none(without.step(tracked_close(1, 190, 0, 500)));
 }
 
 TEST_CASE("ORB-SLAM2 baseline: the ratio boundary is strict", "[keyframe][orbslam2]") {
@@ -1171,7 +1224,7 @@ TEST_CASE("KeyframePolicy forwards to the policy a setting names", "[keyframe][p
   }
   // The rule names are distinct (they go into logs).
   std::vector<std::string> names;
-  for (int r = 0; r <= static_cast<int>(Rule::max_frame_gap); ++r)
+  for (int r = 0; r <= static_cast<int>(Rule::close_points); ++r)
     names.push_back(cge::to_string(static_cast<Rule>(r)));
   std::sort(names.begin(), names.end());
   REQUIRE(std::adjacent_find(names.begin(), names.end()) == names.end());

@@ -38,6 +38,11 @@ struct FrameSummary {
   std::vector<Point> instance_centres_px;
   /// Map points tracked in this frame (inliers after pose optimisation), >= 0.
   int tracked_points = 0;
+  /// Keypoints with a close depth (ORB-SLAM2: closer than ThDepth baselines) that track a map point,
+  /// and those that do not; -1 when the host does not count them (the ORB-SLAM2 baseline's
+  /// close-point rule then stays off). Only that baseline reads them.
+  int tracked_close_points = -1;
+  int untracked_close_points = -1;
 
   int instance_count() const { return static_cast<int>(instance_centres_px.size()); }
 

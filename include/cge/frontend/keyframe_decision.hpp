@@ -18,6 +18,7 @@ enum class KeyframeRule : std::uint8_t {
   interval_best_candidate,  ///< patch policy: interval end (or flush), the candidate with the highest D_sum
   tracked_ratio,            ///< ORB-SLAM2 baseline: tracked points under ratio x the reference keyframe's
   max_frame_gap,            ///< ORB-SLAM2 baseline: max_frame_gap frames since the reference keyframe
+  close_points,             ///< ORB-SLAM2 baseline: few close points tracked, many untracked
 };
 
 /// Stable lower-case name of a rule, for logs and settings files.
@@ -39,6 +40,8 @@ inline const char* to_string(KeyframeRule rule) {
       return "tracked_ratio";
     case KeyframeRule::max_frame_gap:
       return "max_frame_gap";
+    case KeyframeRule::close_points:
+      return "close_points";
   }
   return "unknown";
 }
