@@ -58,6 +58,7 @@
 #include "cge/slam/loop_closer.hpp"
 #include "cge/slam/moving_keypoints.hpp"
 #include "cge/slam/output_files.hpp"
+#include "cge/slam/settings_from_orbslam2.hpp"
 #include "cge/slam/system.hpp"
 
 #include "tool_support.hpp"
@@ -92,6 +93,7 @@ struct Options {
   int frames = 0;  // 0: all (dataset) or kDefaultPresetFrames (rendered)
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   int keyframe_interval = cge::PatchKeyframeSettings<double>{}.interval_frames;  // mode YMK: k
+  int orb_spread = cge::slam::OrbSettings{}.spread_oversampling;
   std::string loop_correction = "pgo+ba";                                        // none | pgo | pgo+ba
   // Depth term of the tracking refinement (0: pixels only) and local BA (on | off).
   double tracking_depth_sigma = cge::slam::TrackerSettings{}.refinement_depth_sigma_per_m;
@@ -120,22 +122,10 @@ std::string short_number(double value) {
 
 // ---- settings ------------------------------------------------------------------------------------
 
-/// Camera, depth scale and ORB extractor from an ORB-SLAM2 TUM YAML file.
+/// Camera, depth scale, ORB extractor and keyframe gap from an ORB-SLAM2 TUM YAML file.
 void apply_settings_file(const fs::path& file, cge::PinholeIntrinsics<double>& intrinsics,
                          cge::slam::SystemSettings& settings) {
-  const cge::dataset::OrbSlam2Settings s = cge::dataset::read_orbslam2_settings(file);
-  intrinsics = s.camera;
-  settings.frame.depth_units_per_metre = s.depth_map_factor;
-  settings.frame.orb.features = s.orb.features;
-  settings.frame.orb.scale_factor = s.orb.scale_factor;
-  settings.frame.orb.levels = s.orb.levels;
-  settings.frame.orb.initial_fast_threshold = s.orb.initial_fast_threshold;
-  settings.frame.orb.min_fast_threshold = s.orb.min_fast_threshold;
-  if (!s.distortion.is_zero()) {
-    std::fprintf(stderr,
-                 "%s: warning: %s has lens distortion, which the tracker ignores (keypoints are not undistorted)\n",
-                 kProgram, file.string().c_str());
-  }
+  cge::slam::apply_orbslam2_settings(cge::dataset::read_orbslam2_settings(file), intrinsics, settings);
 }
 
 // ---- the output folder ---------------------------------------------------------------------------
@@ -421,6 +411,7 @@ int run(Options opt) {
   settings.seed = opt.seed;
   settings.mapping.reference_min_observations = opt.reference_min_observations;
   settings.patch_keyframes.interval_frames = opt.keyframe_interval;
+  settings.frame.orb.spread_oversampling = opt.orb_spread;
   settings.keep_keyframe_images = opt.map;
   settings.loop_correction.enabled = opt.loop_correction != "none";
   settings.local_mapping.bundle_adjustment = opt.local_ba == "on";
@@ -577,7 +568,7 @@ int run(Options opt) {
   nlohmann::ordered_json summary = make_summary(system, opt, source_name, gt, loop_settings_json);
   if (opt.map) {
     // Semantic maps from the final (optimised) keyframes: dense cloud, octree, top view, scores.
-    cge::mapping::SemanticMapBuilder map(intrinsics);
+    cge::mapping::SemanticMapBuilder map(intrinsics, {}, settings.frame.distortion);
     map.rebuild(system.map().keyframes());
     map.write_ply(out.stage("map.ply"));
     map.write_octree(out.stage("map.ot"), out.stage("map.bt"));
@@ -701,6 +692,9 @@ int main(int argc, char** argv) {
                  "ORB-SLAM2 keyframe baseline: count the reference keyframe's map points seen by >= this many "
                  "keyframes (ORB-SLAM2's nMinObs)")
       ->capture_default_str();
+  app.add_option("--orb-spread", opt.orb_spread,
+                 "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")
+      ->check(CLI::Range(1, 8));
   app.add_option("--keyframe-interval", opt.keyframe_interval,
                  "mode YMK: frames per interval of the patch keyframe selector (k; its best candidate is inserted "
                  "at the end of each interval)")

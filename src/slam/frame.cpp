@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <utility>
 #include <stdexcept>
 #include <string>
 
@@ -33,12 +35,72 @@ FrameMaker::FrameMaker(const SystemSettings& settings, const PinholeIntrinsics<d
   }
 }
 
+namespace {
+
+/// Of each pyramid level's candidates, its share (count / oversampling, rounded) taken cell by
+/// cell: the best response of every cell, then every cell's second best, ... (cells visited by
+/// their best response, ties by candidate order). Keeps the candidates' order otherwise.
+std::vector<cv::KeyPoint> spread_over_cells(const std::vector<cv::KeyPoint>& candidates, int oversampling,
+                                            int cell_px, double scale_factor) {
+  std::map<int, std::vector<int>> by_level;
+  for (int i = 0; i < static_cast<int>(candidates.size()); ++i) {
+    by_level[std::max(candidates[static_cast<std::size_t>(i)].octave, 0)].push_back(i);
+  }
+  std::vector<char> keep(candidates.size(), 0);
+  for (const auto& [level, members] : by_level) {
+    const double cell = cell_px * std::pow(scale_factor, level);
+    std::map<std::pair<int, int>, std::vector<int>> cells;  // (row, col) -> candidates
+    for (const int i : members) {
+      const cv::Point2f& p = candidates[static_cast<std::size_t>(i)].pt;
+      cells[{static_cast<int>(p.y / cell), static_cast<int>(p.x / cell)}].push_back(i);
+    }
+    const auto stronger = [&](int a, int b) {
+      const float ra = candidates[static_cast<std::size_t>(a)].response;
+      const float rb = candidates[static_cast<std::size_t>(b)].response;
+      return ra != rb ? ra > rb : a < b;
+    };
+    std::vector<std::vector<int>> ranked;
+    for (auto& entry : cells) {
+      std::sort(entry.second.begin(), entry.second.end(), stronger);
+      ranked.push_back(std::move(entry.second));
+    }
+    std::sort(ranked.begin(), ranked.end(),
+              [&](const std::vector<int>& a, const std::vector<int>& b) { return stronger(a.front(), b.front()); });
+    const std::size_t quota = (members.size() + static_cast<std::size_t>(oversampling) / 2) /
+                              static_cast<std::size_t>(oversampling);
+    std::size_t taken = 0;
+    for (std::size_t rank = 0; taken < quota; ++rank) {
+      for (const std::vector<int>& cell_members : ranked) {
+        if (rank < cell_members.size() && taken < quota) {
+          keep[static_cast<std::size_t>(cell_members[rank])] = 1;
+          ++taken;
+        }
+      }
+    }
+  }
+  std::vector<cv::KeyPoint> out;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    if (keep[i]) out.push_back(candidates[i]);
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<cv::KeyPoint> FrameMaker::detect(const cv::Mat& gray, int fast_threshold, cv::Mat& descriptors) const {
   const OrbSettings& o = settings_.frame.orb;
-  cv::Ptr<cv::ORB> orb = cv::ORB::create(o.features, static_cast<float>(o.scale_factor), o.levels, o.edge_threshold_px,
-                                         0, 2, cv::ORB::HARRIS_SCORE, o.patch_size_px, fast_threshold);
+  const int s = o.spread_oversampling;
+  cv::Ptr<cv::ORB> orb = cv::ORB::create(o.features * s, static_cast<float>(o.scale_factor), o.levels,
+                                         o.edge_threshold_px, 0, 2, cv::ORB::HARRIS_SCORE, o.patch_size_px,
+                                         fast_threshold);
   std::vector<cv::KeyPoint> keypoints;
-  orb->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
+  if (s == 1) {
+    orb->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
+    return keypoints;
+  }
+  orb->detect(gray, keypoints);
+  keypoints = spread_over_cells(keypoints, s, o.spread_cell_px, o.scale_factor);
+  orb->compute(gray, keypoints, descriptors);
   return keypoints;
 }
 
@@ -78,14 +140,26 @@ Frame FrameMaker::extract(int index, double timestamp_s, const cv::Mat& bgr, con
     f.keypoints = detect(gray, o.min_fast_threshold, f.descriptors);
   }
 
+  const FrameSettings& fs = settings_.frame;
+  std::vector<cv::Point2f> detected(f.keypoints.size());
+  for (std::size_t i = 0; i < f.keypoints.size(); ++i) detected[i] = f.keypoints[i].pt;
+  f.undistorted_px = opencv::undistort_pixels(detected, intrinsics_, fs.distortion, fs.undistort);
+  if (bounds_size_ != f.image_size) {
+    undistorted_bounds_ = opencv::undistorted_image_bounds(f.image_size, intrinsics_, fs.distortion, fs.undistort);
+    bounds_size_ = f.image_size;
+  }
+  f.undistorted_bounds = undistorted_bounds_;
+
   const double nan = std::numeric_limits<double>::quiet_NaN();
   f.labels.assign(f.keypoints.size(), FeatureLabel::static_feature);
   f.points_camera_m.assign(f.keypoints.size(), Eigen::Vector3d(nan, nan, nan));
   for (std::size_t i = 0; i < f.keypoints.size(); ++i) {
-    const cv::Point2f& p = f.keypoints[i].pt;
-    const double d = f.depth_m.at<float>(opencv::nearest_pixel(p, f.depth_m.size()));
-    if (std::isfinite(d) && d > settings_.frame.min_depth_m && d < settings_.frame.max_depth_m) {
-      f.points_camera_m[i] = intrinsics_.backproject(p.x, p.y, d);
+    // The depth image is registered to the (distorted) colour image: read it where the keypoint
+    // was detected, back-project from where the ideal camera sees it.
+    const double d = f.depth_m.at<float>(opencv::nearest_pixel(detected[i], f.depth_m.size()));
+    if (std::isfinite(d) && d > fs.min_depth_m && d < fs.max_depth_m) {
+      const cv::Point2f& u = f.undistorted_px[i];
+      f.points_camera_m[i] = intrinsics_.backproject(u.x, u.y, d);
     }
   }
   return f;

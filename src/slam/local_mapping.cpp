@@ -18,7 +18,8 @@ BundleObservation keyframe_bundle_observation(const Keyframe& kf, int keypoint_i
   BundleObservation b;
   b.keyframe = pose;
   b.point = point;
-  b.pixel_px = Eigen::Vector2d(kp.pt.x, kp.pt.y);
+  const cv::Point2f pixel = undistorted_position(kf, static_cast<std::size_t>(keypoint_index));
+  b.pixel_px = Eigen::Vector2d(pixel.x, pixel.y);
   b.sigma_px = keypoint_sigma_px(kp, orb_scale_factor);
   const double z = kf.points_camera_m[static_cast<std::size_t>(keypoint_index)].z();
   if (std::isfinite(z) && z > 0) {

@@ -117,6 +117,10 @@ void check_keyframe(const Keyframe& kf, int width, int height) {
     throw std::invalid_argument(where.str() + std::to_string(kf.labels.size()) + " labels for " + std::to_string(n) +
                                 " keypoints");
   }
+  if (!kf.undistorted_px.empty() && kf.undistorted_px.size() != n) {
+    throw std::invalid_argument(where.str() + std::to_string(kf.undistorted_px.size()) + " undistorted positions for " +
+                                std::to_string(n) + " keypoints (expected one per keypoint, or none)");
+  }
   if (!kf.points_camera_m.empty() && kf.points_camera_m.size() != n) {
     throw std::invalid_argument(where.str() + std::to_string(kf.points_camera_m.size()) + " 3-D points for " +
                                 std::to_string(n) + " keypoints (expected one per keypoint, or none)");
@@ -253,7 +257,7 @@ void LoopCloser::geometric_check(const Keyframe& current, const Keyframe& match,
     const int m = match_rows[static_cast<std::size_t>(kv.first)];
     const Eigen::Vector3d& p = match.points_camera_m[static_cast<std::size_t>(m)];
     object.emplace_back(p.x(), p.y(), p.z());
-    image.emplace_back(current.keypoints[static_cast<std::size_t>(q)].pt);
+    image.emplace_back(undistorted_position(current, static_cast<std::size_t>(q)));
     pairs.emplace_back(q, m);
   }
   decision.reason = LoopReason::pose_not_robust;

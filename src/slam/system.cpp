@@ -48,6 +48,17 @@ double elapsed_ms(Clock::time_point since) {
 
 double& time_of(FrameRecord& r, Stage s) { return r.times_ms[static_cast<std::size_t>(s)]; }
 
+/// A map point's observations, each with depth counting depth_weight times (ORB-SLAM2 counts a
+/// stereo/RGB-D observation twice).
+int weighted_observations(const Map& map, const MapPoint& p, int depth_weight) {
+  int n = 0;
+  for (const Observation& o : p.observations) {
+    const Keyframe& kf = map.keyframe(o.keyframe_id);
+    n += std::isfinite(kf.points_camera_m[static_cast<std::size_t>(o.keypoint_index)].z()) ? depth_weight : 1;
+  }
+  return n;
+}
+
 }  // namespace
 
 System::System(const SystemSettings& settings, const PinholeIntrinsics<double>& intrinsics,
@@ -109,6 +120,7 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
   FrameRecord record;
   record.index = input.index;
   record.timestamp_s = input.timestamp_s;
+  image_size_ = input.bgr.size();
   time_of(record, Stage::segmentation) = segmentation_ms;
 
   auto t = Clock::now();
@@ -142,6 +154,13 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
   t = Clock::now();
   TrackResult track = tracker_.track(frame, map_);
   time_of(record, Stage::tracking) = elapsed_ms(t);
+  if (track.has_pose()) {
+    // Map-point culling's found ratio: predicted in view, and matched as an inlier.
+    for (const std::int64_t p : track.visible_map_points) map_.increase_visible(p);
+    for (const std::int64_t p : track.map_point_ids) {
+      if (p >= 0) map_.increase_found(p);
+    }
+  }
   record.state = track.state;
   record.matches = track.matches;
   record.inliers = track.inliers;
@@ -178,16 +197,26 @@ void System::decide_keyframe(Frame& frame, TrackResult& track, std::size_t recor
   ImageRegion<double> image;
   image.width_px = frame.image_size.width;
   image.height_px = frame.image_size.height;
-  const FrameSummary<double> summary =
+  FrameSummary<double> summary =
       grid_source.summarise(frame.index, image, static_keypoints, frame.instances, track.inliers);
-  // The baseline compares with the reference keyframe's (well-observed) points, as they are now.
+  // Close points (the baseline's close-point rule): static keypoints with a close depth, tracked or not.
+  summary.tracked_close_points = 0;
+  summary.untracked_close_points = 0;
+  for (int i = 0; i < frame.size(); ++i) {
+    if (!frame.is_static(i) || !frame.has_depth(i)) continue;
+    if (frame.points_camera_m[static_cast<std::size_t>(i)].z() >= settings_.frame.close_depth_m) continue;
+    const bool tracked = track.map_point_ids[static_cast<std::size_t>(i)] >= 0;
+    (tracked ? summary.tracked_close_points : summary.untracked_close_points) += 1;
+  }
+  // The baseline compares with the reference keyframe's well-observed points, as they are now.
   const int reference = tracker_.reference_keyframe();
   if (keyframe_policy_.reference_id() != kNoFrame && reference >= 0) {
-    const int min_obs = map_.keyframe_count() <= 2 ? std::min(2, settings_.mapping.reference_min_observations)
-                                                   : settings_.mapping.reference_min_observations;
+    const MappingSettings& m = settings_.mapping;
+    const int min_obs = map_.keyframe_count() <= 2 ? std::min(2, m.reference_min_observations)
+                                                   : m.reference_min_observations;
     int well_observed = 0;
     for (const std::int64_t p : map_.keyframe(reference).map_point_ids) {
-      well_observed += p >= 0 && static_cast<int>(map_.map_point(p).observations.size()) >= min_obs;
+      well_observed += p >= 0 && weighted_observations(map_, map_.map_point(p), m.depth_observation_weight) >= min_obs;
     }
     keyframe_policy_.set_reference_tracked_points(well_observed);
   }
@@ -233,6 +262,7 @@ int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::s
   kf.keypoints = frame.keypoints;
   kf.descriptors = frame.descriptors.clone();
   kf.labels = frame.labels;
+  kf.undistorted_px = frame.undistorted_px;
   kf.points_camera_m = frame.points_camera_m;
   kf.instances = frame.instances;
   kf.dynamic_mask = frame.dynamic_mask;
@@ -244,14 +274,29 @@ int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::s
   const int id = map_.add_keyframe(std::move(kf));
   for (int i = 0; i < frame.size(); ++i) {
     const std::int64_t tracked = track.map_point_ids[static_cast<std::size_t>(i)];
-    if (tracked >= 0) {
-      map_.add_observation(tracked, id, i);
-    } else if (frame.is_static(i) && frame.has_depth(i)) {
-      const Eigen::Vector3d& p_camera = frame.points_camera_m[static_cast<std::size_t>(i)];
-      if (p_camera.z() >= settings_.mapping.max_new_point_depth_m) continue;
-      const std::int64_t point = map_.add_map_point(track.T_world_camera * p_camera, frame.descriptors.row(i));
-      map_.add_observation(point, id, i);
+    if (tracked >= 0) map_.add_observation(tracked, id, i);
+  }
+  // New points from depth, nearest first: every close one, far ones until the keyframe observes
+  // min_new_points (ORB-SLAM2's RGB-D rule; far depth is noisy, but a view of distant walls needs points).
+  std::vector<std::pair<double, int>> by_depth;  // (depth, keypoint), ties by keypoint
+  for (int i = 0; i < frame.size(); ++i) {
+    if (!frame.is_static(i) || !frame.has_depth(i)) continue;
+    const double z = frame.points_camera_m[static_cast<std::size_t>(i)].z();
+    if (z < settings_.mapping.max_new_point_depth_m) by_depth.emplace_back(z, i);
+  }
+  std::sort(by_depth.begin(), by_depth.end());
+  int observed = 0;
+  for (const auto& [z, i] : by_depth) {
+    if (settings_.mapping.only_close_new_points && z > settings_.frame.close_depth_m &&
+        observed > settings_.mapping.min_new_points) {
+      break;
     }
+    ++observed;
+    if (track.map_point_ids[static_cast<std::size_t>(i)] >= 0) continue;  // tracked: observed already
+    const Eigen::Vector3d& p_camera = frame.points_camera_m[static_cast<std::size_t>(i)];
+    const std::int64_t point = map_.add_map_point(track.T_world_camera * p_camera, frame.descriptors.row(i), id);
+    map_.add_observation(point, id, i);
+    recent_points_.push_back(point);
   }
   tracker_.set_reference_keyframe(id);
   FrameRecord& r = records_[record];
@@ -274,12 +319,32 @@ void System::keep_relative_to(std::size_t record, int keyframe_id) {
   r.T_reference_camera = map_.keyframe(keyframe_id).T_world_camera.inverse() * r.T_world_camera;
 }
 
-void System::after_keyframe_inserted(int keyframe_id) {
-  if (settings_.local_mapping.bundle_adjustment) {
-    const auto start_local = Clock::now();
-    local_bundle_adjustment(map_, keyframe_id, intrinsics_, settings_.local_mapping, settings_.frame.orb.scale_factor);
-    time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_local);
+void System::local_mapping(int keyframe_id) {
+  const LocalMappingSettings& lm = settings_.local_mapping;
+  MapMaintenanceSettings maintenance = lm.maintenance;
+  maintenance.close_depth_m = settings_.frame.close_depth_m;
+  const double scale = settings_.frame.orb.scale_factor;
+  if (lm.cull_map_points) cull_recent_map_points(map_, recent_points_, keyframe_id, maintenance);
+  if (lm.triangulate_points) {
+    const TriangulationReport made =
+        triangulate_new_points(map_, keyframe_id, intrinsics_, image_size_, scale, maintenance);
+    recent_points_.insert(recent_points_.end(), made.created.begin(), made.created.end());
   }
+  if (lm.fuse_map_points) fuse_map_points(map_, keyframe_id, intrinsics_, image_size_, scale, maintenance);
+  if (lm.bundle_adjustment) local_bundle_adjustment(map_, keyframe_id, intrinsics_, lm, scale);
+  if (lm.cull_keyframes) {
+    cull_redundant_keyframes(map_, keyframe_id, maintenance);
+    // The tracker's local map is centred on a live keyframe.
+    int reference = tracker_.reference_keyframe();
+    while (reference >= 0 && map_.keyframe(reference).culled) reference = map_.keyframe(reference).parent;
+    tracker_.set_reference_keyframe(reference);
+  }
+}
+
+void System::after_keyframe_inserted(int keyframe_id) {
+  const auto start_local = Clock::now();
+  local_mapping(keyframe_id);
+  time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_local);
   // Loop closing (ALGORITHMS.md section 7): the closer reads map_ (a KeyframeDatabaseView) and
   // its decision becomes a LoopRecord. The correction of an accepted loop (pose-graph
   // optimisation, then bundle adjustment, through map_.set_keyframe_pose / set_map_point_position)
@@ -319,38 +384,61 @@ void System::after_keyframe_inserted(int keyframe_id) {
 
 void System::correct_loop(int query_keyframe) {
   const LoopCorrectionSettings& lc = settings_.loop_correction;
-  const int n = map_.keyframe_count();
-  std::vector<Eigen::Isometry3d> before(static_cast<std::size_t>(n));
-  for (int k = 0; k < n; ++k) before[static_cast<std::size_t>(k)] = map_.keyframe(k).T_world_camera;
-  const auto pose = [&](int k) -> const Eigen::Isometry3d& { return before[static_cast<std::size_t>(k)]; };
+  // The optimisation runs over the live keyframes (node i is keyframe live[i]); culled ones follow
+  // their parents (Map::set_keyframe_pose moves them).
+  std::vector<int> live;
+  std::vector<int> node_of(static_cast<std::size_t>(map_.keyframe_count()), -1);
+  for (int k = 0; k < map_.keyframe_count(); ++k) {
+    if (map_.keyframe(k).culled) continue;
+    node_of[static_cast<std::size_t>(k)] = static_cast<int>(live.size());
+    live.push_back(k);
+  }
+  const auto node = [&](int k) { return node_of[static_cast<std::size_t>(k)]; };
+  std::vector<Eigen::Isometry3d> before;
+  for (const int k : live) before.push_back(map_.keyframe(k).T_world_camera);
+  const auto pose = [&](int k) { return map_.keyframe(k).T_world_camera; };
+  /// A keyframe's nearest live ancestor (itself when live).
+  const auto live_ancestor = [&](int k) {
+    while (map_.keyframe(k).culled) k = map_.keyframe(k).parent;
+    return k;
+  };
 
-  // Pose graph: relative poses as currently estimated (sequential, covisibility), plus the measured
-  // loop edges; keyframe 0 fixes the gauge.
+  // Pose graph: relative poses as currently estimated (consecutive live keyframes, covisibility),
+  // plus the measured loop edges; keyframe 0 fixes the gauge.
   std::vector<PoseGraphEdge> edges;
   const auto add_edge = [&](int a, int b, const Eigen::Isometry3d& T_a_b) {
-    edges.push_back(PoseGraphEdge::weighted(a, b, T_a_b, lc.rotation_weight, lc.translation_weight));
+    edges.push_back(PoseGraphEdge::weighted(node(a), node(b), T_a_b, lc.rotation_weight, lc.translation_weight));
   };
-  for (int k = 1; k < n; ++k) add_edge(k - 1, k, pose(k - 1).inverse() * pose(k));
-  for (int a = 0; a < n; ++a) {
+  for (std::size_t i = 1; i < live.size(); ++i) add_edge(live[i - 1], live[i], pose(live[i - 1]).inverse() * pose(live[i]));
+  for (const int a : live) {
     for (int b : map_.covisible_keyframes(a, -1)) {  // most shared points first
       if (map_.shared_points(a, b) < lc.covisibility_min_shared_points) break;
-      if (b > a + 1) add_edge(a, b, pose(a).inverse() * pose(b));
+      if (b > a && node(b) != node(a) + 1) add_edge(a, b, pose(a).inverse() * pose(b));
     }
   }
-  for (const LoopEdge& e : loop_edges_) add_edge(e.match, e.query, e.T_match_query);
+  for (const LoopEdge& e : loop_edges_) {
+    // An end culled since: the edge moves to its live ancestor, through the current relative pose.
+    const int match = live_ancestor(e.match), query = live_ancestor(e.query);
+    if (match == e.match && query == e.query) {
+      add_edge(match, query, e.T_match_query);
+    } else {
+      add_edge(match, query,
+               pose(match).inverse() * pose(e.match) * e.T_match_query * pose(e.query).inverse() * pose(query));
+    }
+  }
   const PoseGraphResult graph = PoseGraphOptimiser{lc.pose_graph}.optimise(before, edges, {0});
 
-  // A point moves rigidly with its first keyframe, from pose `from` to pose `to`.
-  const auto move_with_first_keyframe = [this](const MapPoint& p, const std::vector<Eigen::Isometry3d>& from,
-                                               const std::vector<Eigen::Isometry3d>& to) {
-    const auto k = static_cast<std::size_t>(p.observations.front().keyframe_id);
-    map_.set_map_point_position(p.id, to[k] * (from[k].inverse() * p.position_world));
+  // A point moves rigidly with its first keyframe, from pose `from` to pose `to` (node-indexed).
+  const auto move_with_first_keyframe = [&](const MapPoint& p, const std::vector<Eigen::Isometry3d>& from,
+                                            const std::vector<Eigen::Isometry3d>& to) {
+    const auto i = static_cast<std::size_t>(node(p.observations.front().keyframe_id));
+    map_.set_map_point_position(p.id, to[i] * (from[i].inverse() * p.position_world));
   };
-  // Map points follow their first keyframe's correction.
+  // Map points follow their first keyframe's correction (bad points have no observations).
   for (const MapPoint& p : map_.map_points()) {
     if (!p.observations.empty()) move_with_first_keyframe(p, before, graph.T_world_camera);
   }
-  for (int k = 0; k < n; ++k) map_.set_keyframe_pose(k, graph.T_world_camera[static_cast<std::size_t>(k)]);
+  for (std::size_t i = 0; i < live.size(); ++i) map_.set_keyframe_pose(live[i], graph.T_world_camera[i]);
 
   if (lc.bundle_adjustment) {
     // Global BA over every point seen by at least two keyframes; pixel + depth observations.
@@ -364,8 +452,8 @@ void System::correct_loop(int query_keyframe) {
       point_ids.push_back(p.id);
       for (const Observation& o : p.observations) {
         observations.push_back(keyframe_bundle_observation(map_.keyframe(o.keyframe_id), o.keypoint_index,
-                                                           o.keyframe_id, index, settings_.frame.orb.scale_factor,
-                                                           lc.depth_sigma_per_m));
+                                                           node(o.keyframe_id), index,
+                                                           settings_.frame.orb.scale_factor, lc.depth_sigma_per_m));
       }
     }
     if (!points.empty()) {
@@ -377,13 +465,14 @@ void System::correct_loop(int query_keyframe) {
       for (const MapPoint& p : map_.map_points()) {
         if (p.observations.size() == 1) move_with_first_keyframe(p, graph.T_world_camera, ba.T_world_camera);
       }
-      for (int k = 0; k < n; ++k) map_.set_keyframe_pose(k, ba.T_world_camera[static_cast<std::size_t>(k)]);
+      for (std::size_t i = 0; i < live.size(); ++i) map_.set_keyframe_pose(live[i], ba.T_world_camera[i]);
       for (std::size_t i = 0; i < point_ids.size(); ++i)
         map_.set_map_point_position(point_ids[i], ba.points_world_m[i]);
     }
   }
-  const auto q = static_cast<std::size_t>(query_keyframe);
-  tracker_.apply_map_correction(map_.keyframe(query_keyframe).T_world_camera * before[q].inverse());
+  const int q = live_ancestor(query_keyframe);
+  tracker_.apply_map_correction(map_.keyframe(q).T_world_camera *
+                                before[static_cast<std::size_t>(node(q))].inverse());
 }
 
 void System::finish() {

@@ -48,7 +48,7 @@ class KeypointGrid {
         cells_(static_cast<std::size_t>(cols_ * rows_)) {
     for (int i = 0; i < frame.size(); ++i) {
       if (!frame.is_static(i)) continue;
-      const cv::Point2f& p = frame.keypoints[static_cast<std::size_t>(i)].pt;
+      const cv::Point2f& p = frame.undistorted_px[static_cast<std::size_t>(i)];
       cells_[static_cast<std::size_t>(cell_row(p.y) * cols_ + cell_col(p.x))].push_back(i);
     }
   }
@@ -85,7 +85,7 @@ KeypointMatch best_keypoint_near(const Frame& frame, const KeypointGrid& grid, d
   const double radius_sq = radius_px * radius_px;
   int best = INT_MAX, second = INT_MAX, best_index = -1;
   grid.for_each_near(u, v, radius_px, [&](int i) {
-    const cv::Point2f& kp = frame.keypoints[static_cast<std::size_t>(i)].pt;
+    const cv::Point2f& kp = frame.undistorted_px[static_cast<std::size_t>(i)];
     const double du = kp.x - u, dv = kp.y - v;
     if (du * du + dv * dv > radius_sq) return;
     const int d = bow::hamming_distance_32_bytes(descriptor, frame.descriptors.ptr<std::uint8_t>(i));
@@ -120,6 +120,7 @@ struct Tracker::Attempt {
   int matches = 0;
   int inliers = 0;
   std::vector<std::int64_t> map_point_ids;
+  std::vector<std::int64_t> visible;  ///< points the last projection search put inside the image
 };
 
 Tracker::Tracker(const TrackerSettings& settings, const PinholeIntrinsics<double>& intrinsics, double orb_scale_factor)
@@ -151,18 +152,18 @@ std::vector<std::int64_t> Tracker::local_map_points(const Map& map, int centre) 
 
 int Tracker::match_by_projection(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
                                  const Eigen::Isometry3d& T_world_camera, double radius_px,
-                                 std::vector<std::int64_t>& matches) const {
+                                 std::vector<std::int64_t>& matches, std::vector<std::int64_t>* visible) const {
   const KeypointGrid grid(frame);
   matches.assign(static_cast<std::size_t>(frame.size()), -1);
   std::vector<int> best_distance(static_cast<std::size_t>(frame.size()), INT_MAX);
   const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
-  const double width = frame.image_size.width, height = frame.image_size.height;
   for (const std::int64_t id : points) {
     const MapPoint& mp = map.map_point(id);
     const Eigen::Vector3d p_camera = T_camera_world * mp.position_world;
     if (p_camera.z() < kMinPointDepthM) continue;
     const Eigen::Vector2d uv = intrinsics_.project(p_camera);
-    if (!(uv.x() >= 0 && uv.x() < width && uv.y() >= 0 && uv.y() < height)) continue;
+    if (!frame.undistorted_bounds.contains(uv.x(), uv.y())) continue;
+    if (visible != nullptr) visible->push_back(id);
     const std::uint8_t* descriptor = mp.descriptor.ptr<std::uint8_t>(0);
     const KeypointMatch m =
         best_keypoint_near(frame, grid, uv.x(), uv.y(), radius_px, descriptor, settings_.max_hamming, settings_.ratio);
@@ -195,7 +196,7 @@ bool Tracker::ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
   std::vector<cv::Point2d> image;
   for (std::size_t k = 0; k < keypoints.size(); ++k) {
     const Eigen::Vector3d& X = points_world[k];
-    const cv::Point2f& uv = frame.keypoints[static_cast<std::size_t>(keypoints[k])].pt;
+    const cv::Point2f& uv = frame.undistorted_px[static_cast<std::size_t>(keypoints[k])];
     object.emplace_back(X.x(), X.y(), X.z());
     image.emplace_back(uv.x, uv.y);
   }
@@ -227,7 +228,7 @@ bool Tracker::refine_pose(const Frame& frame, const Map& map, const std::vector<
     if (matches[i] < 0) continue;
     PoseObservation o;
     o.point_world_m = map.map_point(matches[i]).position_world;
-    o.pixel_px = Eigen::Vector2d(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
+    o.pixel_px = Eigen::Vector2d(frame.undistorted_px[i].x, frame.undistorted_px[i].y);
     o.sigma_px = keypoint_sigma_px(frame.keypoints[i], orb_scale_factor_);
     add_depth(frame, static_cast<int>(i), o);
     observations.push_back(o);
@@ -255,7 +256,8 @@ bool Tracker::refine_pose(const Frame& frame, const Map& map, const std::vector<
 bool Tracker::refine_with_local_map(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
                                     const Eigen::Isometry3d& T_initial, Attempt& out) const {
   std::vector<std::int64_t> matches;
-  match_by_projection(frame, map, points, T_initial, settings_.search_radius_px, matches);
+  out.visible.clear();
+  match_by_projection(frame, map, points, T_initial, settings_.search_radius_px, matches, &out.visible);
   return refine_pose(frame, map, matches, T_initial, settings_.min_inliers, out);
 }
 
@@ -321,10 +323,11 @@ bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::
   if (!ransac_pose(frame, keypoints, points_world, settings_.min_inliers, T_ransac)) return false;
   std::vector<PoseObservation> observations;
   for (std::size_t k = 0; k < keypoints.size(); ++k) {
-    const cv::KeyPoint& kp = frame.keypoints[static_cast<std::size_t>(keypoints[k])];
+    const auto i = static_cast<std::size_t>(keypoints[k]);
+    const cv::KeyPoint& kp = frame.keypoints[i];
     PoseObservation o;
     o.point_world_m = points_world[k];
-    o.pixel_px = Eigen::Vector2d(kp.pt.x, kp.pt.y);
+    o.pixel_px = Eigen::Vector2d(frame.undistorted_px[i].x, frame.undistorted_px[i].y);
     o.sigma_px = keypoint_sigma_px(kp, orb_scale_factor_);
     add_depth(frame, keypoints[k], o);
     observations.push_back(o);
@@ -344,14 +347,14 @@ bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::
   out.T_world_camera = refined.T_world_camera;
   std::vector<std::int64_t> matches;
   out.matches = match_by_projection(frame, map, local_map_points(map, reference_keyframe_), out.T_world_camera,
-                                    settings_.search_radius_px, matches);
+                                    settings_.search_radius_px, matches, &out.visible);
   out.map_point_ids.assign(matches.size(), -1);
   const Eigen::Isometry3d T_camera_world_refined = out.T_world_camera.inverse();
   for (std::size_t i = 0; i < matches.size(); ++i) {
     if (matches[i] < 0) continue;
     const Eigen::Vector3d p_camera = T_camera_world_refined * map.map_point(matches[i]).position_world;
     const Eigen::Vector2d r =
-        intrinsics_.project(p_camera) - Eigen::Vector2d(frame.keypoints[i].pt.x, frame.keypoints[i].pt.y);
+        intrinsics_.project(p_camera) - Eigen::Vector2d(frame.undistorted_px[i].x, frame.undistorted_px[i].y);
     const double sigma = keypoint_sigma_px(frame.keypoints[i], orb_scale_factor_);
     if (r.squaredNorm() / (sigma * sigma) > settings_.refinement.chi2_threshold_2dof) continue;
     out.map_point_ids[i] = matches[i];
@@ -479,6 +482,7 @@ TrackResult Tracker::track(const Frame& frame, const Map& map) {
   result.matches = attempt.matches;
   result.inliers = attempt.inliers;
   result.map_point_ids = std::move(attempt.map_point_ids);
+  result.visible_map_points = std::move(attempt.visible);
 
   // The reference keyframe: the one observing most of the tracked points (ties: smaller id).
   std::vector<int> votes(static_cast<std::size_t>(map.keyframe_count()), 0);

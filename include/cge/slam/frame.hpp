@@ -15,6 +15,7 @@
 #include "cge/core/semantic_instance.hpp"
 #include "cge/frontend/depth_mad_filter.hpp"
 #include "cge/frontend/feature_label.hpp"
+#include "cge/opencv/undistort.hpp"
 #include "cge/segmentation/instance_segmenter.hpp"
 #include "cge/slam/settings.hpp"
 
@@ -26,10 +27,17 @@ struct Frame {
   double timestamp_s = 0;  ///< seconds
   cv::Size image_size;     ///< pixels
 
-  std::vector<cv::KeyPoint> keypoints;           ///< level-0 pixel positions
+  std::vector<cv::KeyPoint> keypoints;           ///< level-0 pixel positions as detected (distorted image)
+  /// Keypoint positions in the ideal pinhole camera, pixels (lens distortion removed; equal to
+  /// keypoints[i].pt without distortion): what projection matching, PnP and refinement use.
+  std::vector<cv::Point2f> undistorted_px;
+  /// The image's extent in undistorted pixels: map points projecting outside it are not searched.
+  opencv::ImageBounds undistorted_bounds;
   cv::Mat descriptors;                           ///< CV_8UC1, one 32-byte ORB row per keypoint
   std::vector<FeatureLabel> labels;              ///< all static until label()
-  std::vector<Eigen::Vector3d> points_camera_m;  ///< back-projected; NaN where depth is missing
+  /// Back-projected from the undistorted position and the depth read at the detected pixel; NaN
+  /// where depth is missing or outside FrameSettings' range.
+  std::vector<Eigen::Vector3d> points_camera_m;
 
   std::vector<SemanticInstance<double>> instances;  ///< every segmented instance (all classes)
   cv::Mat dynamic_mask;                             ///< CV_8UC1, 255 on dynamic instances; empty when none was given
@@ -64,7 +72,7 @@ class FrameMaker {
   /// ORB features of `bgr` (CV_8UC3) and their depth from `depth` (CV_16UC1 in
   /// settings.frame.depth_units_per_metre units, or CV_32FC1 metres) of the same size. Labels are
   /// all static. Throws std::invalid_argument naming the problem for empty images, wrong types or
-  /// sizes that differ.
+  /// sizes that differ. Keypoints are undistorted with settings.frame.distortion.
   Frame extract(int index, double timestamp_s, const cv::Mat& bgr, const cv::Mat& depth);
 
   /// Dynamic elimination of `frame` by the mode: none leaves every label static; Y labels keypoints
@@ -82,6 +90,8 @@ class FrameMaker {
   SystemSettings settings_;
   PinholeIntrinsics<double> intrinsics_;
   DepthMADFilter<> mad_filter_;
+  cv::Size bounds_size_;                 ///< the image size undistorted_bounds_ was computed for
+  opencv::ImageBounds undistorted_bounds_;
 };
 
 }  // namespace slam

@@ -54,5 +54,12 @@ struct Keyframe {
   cv::Mat class_labels;     ///< CV_16UC1: class id + 1 of the instance covering the pixel, 0 = none
 };
 
+/// Keypoint i's position in the ideal pinhole camera, pixels: undistorted_px[i] when the keyframe
+/// carries undistorted positions (Map::add_keyframe fills them), else the detected position (a
+/// keyframe built without them is taken to come from an undistorted camera).
+inline cv::Point2f undistorted_position(const Keyframe& kf, std::size_t i) {
+  return kf.undistorted_px.empty() ? kf.keypoints[i].pt : kf.undistorted_px[i];
+}
+
 }  // namespace slam
 }  // namespace cge

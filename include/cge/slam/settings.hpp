@@ -12,6 +12,9 @@
 #include "cge/ceres/pose_refinement.hpp"
 #include "cge/frontend/depth_mad_filter.hpp"
 #include "cge/frontend/keyframe_policy.hpp"
+#include "cge/core/lens_distortion.hpp"
+#include "cge/opencv/undistort.hpp"
+#include "cge/slam/map_maintenance.hpp"
 
 namespace cge {
 namespace slam {
@@ -64,16 +67,35 @@ struct OrbSettings {
   int min_fast_threshold = 7;
   int edge_threshold_px = 19;  ///< border without keypoints, pixels (ORB-SLAM2: 19)
   int patch_size_px = 31;      ///< ORB patch size, pixels (ORB-SLAM2: 31)
+  /// Spreading keypoints over the image: cv::ORB keeps the corners with the best Harris scores, so
+  /// a few textured regions take most features; ORB-SLAM2 spreads each pyramid level's corners
+  /// over the image instead. With spread_oversampling s > 1, s x features candidates are detected
+  /// and each level keeps its share (1 / s of its candidates) by taking the best of every cell in
+  /// turn, then the second best, ... (cells of spread_cell_px at level 0, scaled with the level).
+  /// 1 = off (cv::ORB's own choice), >= 1. Default 2: on the real fr1/rpy slice YMK's ATE fell from
+  /// 3.9 to 2.8 cm and on rendered walking_xyz from 3.6 to 2.8 mm (docs/REAL_DATA.md).
+  int spread_oversampling = 2;
+  int spread_cell_px = 32;  ///< cell size at pyramid level 0, pixels, >= 1
 };
 
 /// What a Frame is made of.
 struct FrameSettings {
   OrbSettings orb;
+  /// Lens distortion of the colour camera (an ORB-SLAM2 file's Camera.k1 k2 p1 p2 k3). Keypoints
+  /// are detected, masked and given depth in the image as it is; their undistorted positions
+  /// (Frame::undistorted_px) are what geometry uses. Zero: an ideal pinhole camera (TUM fr3, synthetic).
+  LensDistortion distortion;
+  opencv::UndistortSettings undistort;  ///< the iteration that inverts the distortion
   double depth_units_per_metre = 5000;  ///< depth image scale (TUM: 5000 units = 1 m)
   double min_depth_m = 0.1;             ///< closer depths are treated as missing, metres
   /// Farther depths are treated as missing, metres (ORB-SLAM2 keeps points closer than 40 baselines,
   /// 40 * 0.08 m = 3.2 m on TUM; ours is wider because the synthetic depth is reliable further).
   double max_depth_m = 6.0;
+  /// Close/far threshold, metres (ORB-SLAM2: ThDepth baselines, ThDepth * bf / fx; 40 * 40 / 535.4
+  /// = 2.99 m for the synthetic camera.yaml and 3.09 m for TUM fr1). Close points always become map
+  /// points of a new keyframe and drive the keyframe policy's close-point rule; far ones are
+  /// added only to reach MappingSettings::min_new_points (depth noise grows with range).
+  double close_depth_m = 40.0 * 40.0 / 535.4;
   DepthMADSettings mad;  ///< the filter of modes YM and YMK (paper defaults)
 };
 
@@ -121,14 +143,22 @@ struct TrackerSettings {
 
 /// Map points created from depth.
 struct MappingSettings {
-  /// New map points only from keypoints closer than this, metres (depth noise grows with range).
+  /// New map points only from keypoints closer than this, metres (a hard cap above the close/far rule).
   double max_new_point_depth_m = 5.0;
+  /// ORB-SLAM2's rule for a new keyframe's points (Tracking::CreateNewKeyFrame): from its untracked
+  /// static keypoints with depth, nearest first, every close one (FrameSettings::close_depth_m) and
+  /// far ones only until the keyframe observes min_new_points. Off: every one closer than
+  /// max_new_point_depth_m. Off by default: without ORB-SLAM2's monocular triangulation of far
+  /// points the map then lacks them, and the error grew on real and rendered frames (docs/REAL_DATA.md).
+  bool only_close_new_points = false;
+  int min_new_points = 100;  ///< with only_close_new_points (ORB-SLAM2: 100), count >= 0
   /// The ORB-SLAM2 baseline compares a frame's tracked points with the reference keyframe's map
-  /// points seen by at least this many keyframes, >= 1 (2 at most while the map has at most 2
-  /// keyframes). Default 1: every map point the reference keyframe observes, as the baseline's
-  /// contract states (cge/frontend/orbslam2_keyframe_policy.hpp); ORB-SLAM2's own nMinObs is 3,
-  /// which on walking_xyz inserts a keyframe only at the 30-frame gap (docs/SLAM.md).
-  int reference_min_observations = 1;
+  /// points observed at least this many times, >= 1 (2 at most while the map has at most 2
+  /// keyframes; ORB-SLAM2 Tracking::NeedNewKeyFrame: nMinObs = 3).
+  int reference_min_observations = 3;
+  /// How many times an observation with depth counts there, >= 1 (ORB-SLAM2 counts a stereo or
+  /// RGB-D observation twice, MapPoint::AddObservation; so nMinObs 3 means two keyframes with depth).
+  int depth_observation_weight = 2;
 };
 
 /// Local bundle adjustment after each keyframe insertion (ORB-SLAM2's local mapping): the new
@@ -138,6 +168,13 @@ struct MappingSettings {
 /// Pixel + depth observations, Huber then chi2 outlier removal (BundleAdjustmentSettings). Map points
 /// made from one keyframe's noisy depth are otherwise never refined.
 struct LocalMappingSettings {
+  // Map maintenance after each keyframe, in ORB-SLAM2's order (LocalMapping::Run): recent points
+  // culled, new points triangulated, duplicates fused, local BA, redundant keyframes culled.
+  bool cull_map_points = true;      ///< cull_recent_map_points (cge/slam/map_maintenance.hpp)
+  bool triangulate_points = true;   ///< triangulate_new_points for keypoints without usable depth
+  bool fuse_map_points = true;      ///< fuse_map_points among covisible keyframes
+  bool cull_keyframes = true;       ///< cull_redundant_keyframes (its close_depth_m follows FrameSettings)
+  MapMaintenanceSettings maintenance;
   bool bundle_adjustment = true;  ///< false: keyframes and map points stay as tracking made them
   int covisible_keyframes = 10;   ///< window: the new keyframe and at most this many most covisible, count >= 0
   /// Fixed observers: of the keyframes outside the window that see its points, only the next this
@@ -200,8 +237,12 @@ struct SystemSettings {
     if (!(o.scale_factor > 1)) fail("frame.orb.scale_factor must be > 1");
     if (o.levels < 1) fail("frame.orb.levels must be at least 1");
     if (o.initial_fast_threshold < 1 || o.min_fast_threshold < 1) fail("frame.orb FAST thresholds must be >= 1");
+    if (o.spread_oversampling < 1) fail("frame.orb.spread_oversampling must be at least 1");
+    if (o.spread_cell_px < 1) fail("frame.orb.spread_cell_px must be at least 1");
     if (!(frame.depth_units_per_metre > 0)) fail("frame.depth_units_per_metre must be > 0");
     if (!(frame.min_depth_m >= 0 && frame.max_depth_m > frame.min_depth_m)) fail("frame depth range is empty");
+    if (!frame.distortion.is_finite()) fail("frame.distortion coefficients must be finite");
+    frame.undistort.validate();
     frame.mad.validate();
     const TrackerSettings& t = tracker;
     if (t.local_recent_keyframes < 1) fail("tracker.local_recent_keyframes must be at least 1");
@@ -224,10 +265,14 @@ struct SystemSettings {
     if (t.min_relocalisation_inliers < 4) fail("tracker.min_relocalisation_inliers must be at least 4");
     if (!(mapping.max_new_point_depth_m > 0)) fail("mapping.max_new_point_depth_m must be > 0");
     if (mapping.reference_min_observations < 1) fail("mapping.reference_min_observations must be at least 1");
+    if (mapping.min_new_points < 0) fail("mapping.min_new_points must not be negative");
+    if (mapping.depth_observation_weight < 1) fail("mapping.depth_observation_weight must be at least 1");
+    if (!(frame.close_depth_m > 0)) fail("frame.close_depth_m must be > 0");
     if (local_mapping.covisible_keyframes < 0) fail("local_mapping.covisible_keyframes must not be negative");
     if (local_mapping.fixed_keyframes < 0) fail("local_mapping.fixed_keyframes must not be negative");
     if (!(local_mapping.depth_sigma_per_m > 0)) fail("local_mapping.depth_sigma_per_m must be > 0");
     local_mapping.bundle.validate();
+    local_mapping.maintenance.validate();
     const LoopCorrectionSettings& lc = loop_correction;
     if (lc.min_keyframes_between < 0) fail("loop_correction.min_keyframes_between must not be negative");
     if (lc.covisibility_min_shared_points < 1)

@@ -159,6 +159,8 @@ class System {
   /// The loop closer appends its decision to loops_ and corrects poses through map_; timed as the
   /// loop_closing and optimisation stages of the current frame.
   void after_keyframe_inserted(int keyframe_id);
+  /// Map maintenance and local BA around a new keyframe (LocalMappingSettings), timed as local_mapping.
+  void local_mapping(int keyframe_id);
   static constexpr std::size_t kNoRecord = static_cast<std::size_t>(-1);
   /// Keeps record's pose relative to keyframe_id's pose as it is now (see pose_of).
   void keep_relative_to(std::size_t record, int keyframe_id);
@@ -184,6 +186,9 @@ class System {
   std::vector<LoopEdge> loop_edges_;  ///< every accepted loop, for all later pose graphs
   int last_correction_keyframe_ = -1;
   int corrections_ = 0;
+  /// Map points made by the last keyframes, not yet judged by map-point culling (ascending id).
+  std::vector<std::int64_t> recent_points_;
+  cv::Size image_size_;  ///< of the frames processed (projections into keyframes)
 };
 
 }  // namespace slam

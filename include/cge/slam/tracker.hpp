@@ -54,6 +54,9 @@ struct TrackResult {
   std::vector<std::int64_t> map_point_ids;
   /// The keyframe sharing most tracked points (the local map's centre); -1 when lost or initialised.
   int reference_keyframe = -1;
+  /// The local map's points that the final pose puts inside the image (the last projection search),
+  /// ascending id: map-point culling's "visible" count (found / visible).
+  std::vector<std::int64_t> visible_map_points;
 
   bool has_pose() const { return state != TrackingState::lost; }
 };
@@ -96,9 +99,10 @@ class Tracker {
   bool ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
                    const std::vector<Eigen::Vector3d>& points_world, int min_inliers,
                    Eigen::Isometry3d& T_world_camera) const;
+  /// `visible`, when given, receives the points that project into the image (ascending id).
   int match_by_projection(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
                           const Eigen::Isometry3d& T_world_camera, double radius_px,
-                          std::vector<std::int64_t>& matches) const;
+                          std::vector<std::int64_t>& matches, std::vector<std::int64_t>* visible = nullptr) const;
   bool ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches, int min_inliers,
                    Eigen::Isometry3d& T_world_camera) const;
   /// The keypoint's depth as a term of its refinement observation (refinement_depth_sigma_per_m).
