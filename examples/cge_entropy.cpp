@@ -2,20 +2,28 @@
 // graph, read from an edge list or built from a point list. See docs/CLI.md.
 //
 // Output: one "name value" line per quantity on standard output (values with 15 significant
-// digits), diagnostics on standard error. Exit codes: 0 success; 1 a computation that cannot be
+// digits), diagnostics on standard error. The graph is bounded before the work (--max-vertices:
+// the largest vertex id + 1, or the number of points); a computation expected to take long says
+// so on standard error, and on a terminal shows the elapsed time while it runs. Exit codes: 0 success; 1 a computation that cannot be
 // carried out (path multiplicities overflowing double); 2 bad usage or bad input.
 
 #include <cerrno>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <thread>
+
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 
@@ -56,6 +64,52 @@ struct Options {
   double height_px = 480.0;
   int dense_threshold = cge::GraphBuilderSettings<double>().dense_patch_threshold;
   double radius_fraction = cge::GraphBuilderSettings<double>().radius_fraction_of_diagonal;
+  /// Largest accepted number of vertices. The search allocates and loops per vertex, isolated ones
+  /// included (an edge list has max id + 1 vertices): 2^20 keeps a graph of isolated ids within
+  /// ~100 MB and seconds, while real frame graphs have hundreds of nodes.
+  std::int32_t max_vertices = std::int32_t(1) << 20;
+};
+
+/// Searches above this many steps (|V| (|V| + |E|), one breadth-first search per vertex) get a
+/// note on standard error: on this kind of machine they run for a minute or more.
+constexpr double kLongWorkSteps = 1e10;
+
+/// On a terminal, "cge_entropy: computing ... 12 s" redrawn every second while the search runs
+/// (the library call has no progress hook; this thread only prints).
+class ElapsedTicker {
+ public:
+  explicit ElapsedTicker(std::string what) {
+    if (::isatty(::fileno(stderr)) == 0) return;
+    thread_ = std::thread([this, what = std::move(what)] {
+      const auto start = std::chrono::steady_clock::now();
+      std::unique_lock<std::mutex> lock(mutex_);
+      while (!cv_.wait_for(lock, std::chrono::seconds(1), [this] { return done_; })) {
+        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        std::fprintf(stderr, "\r%s: %s ... %.0f s", kProgram, what.c_str(), s);
+        std::fflush(stderr);
+        drawn_ = true;
+      }
+      if (drawn_) std::fputc('\n', stderr);
+    });
+  }
+  ElapsedTicker(const ElapsedTicker&) = delete;
+  ElapsedTicker& operator=(const ElapsedTicker&) = delete;
+  ~ElapsedTicker() {
+    if (!thread_.joinable()) return;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    cv_.notify_one();
+    thread_.join();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool done_ = false;
+  bool drawn_ = false;
+  std::thread thread_;
 };
 
 std::string number(double value) {
@@ -74,6 +128,11 @@ void print_value(const char* name, double value) { std::printf("%s %.15g\n", nam
 
 cge::Graph<double> read_points_graph(std::istream& in, const std::string& source, const Options& opt) {
   const cge::io::PointList list = cge::io::read_point_list(in, source);
+  const std::size_t nodes = list.points.size() + list.instances.size();
+  if (nodes > static_cast<std::size_t>(opt.max_vertices)) {
+    throw UsageError(source + ": " + std::to_string(nodes) + " points exceed --max-vertices " +
+                     std::to_string(opt.max_vertices));
+  }
   cge::ImageRegion<double> image;
   image.width_px = opt.width_px;
   image.height_px = opt.height_px;
@@ -101,6 +160,7 @@ cge::Graph<double> read_points_graph(std::istream& in, const std::string& source
 int run(const Options& opt) {
   require_positive("--alpha", opt.alpha);
   require_positive("--lambda", opt.lambda);
+  if (opt.max_vertices < 1) throw UsageError("--max-vertices must be at least 1");
   if (opt.points) {
     require_positive("--width", opt.width_px);
     require_positive("--height", opt.height_px);
@@ -131,6 +191,8 @@ int run(const Options& opt) {
   } else {
     cge::io::EdgeListOptions eo;
     eo.one_based = opt.one_based;
+    eo.max_vertices = opt.max_vertices;
+    eo.max_vertices_name = "--max-vertices";
     g = cge::io::read_edge_list(in, source, eo);
     if (g.num_nodes() == 0) throw UsageError(source + ": the edge list contains no edges");
   }
@@ -141,7 +203,18 @@ int run(const Options& opt) {
   dde.settings.ties = opt.ties;
   dde.coefficients.kind = opt.coeff;
   dde.scaling.kind = opt.scaling;
-  const auto r = dde.compute(g);
+  const double vertices = g.num_nodes();
+  const double steps = vertices * (vertices + static_cast<double>(g.num_edges()));
+  if (steps > kLongWorkSteps) {
+    std::fprintf(stderr,
+                 "%s: note: %d vertices and %d edges: one breadth-first search per vertex (%.2g steps); this may "
+                 "take minutes\n",
+                 kProgram, g.num_nodes(), g.num_edges(), steps);
+  }
+  const auto r = [&] {
+    const ElapsedTicker ticker("computing the degree sums of " + std::to_string(g.num_nodes()) + " vertices");
+    return dde.compute(g);
+  }();
   if (!r.connected) {
     std::fprintf(stderr,
                  "%s: note: the graph is not connected; the diameter is the largest finite distance and "
@@ -198,6 +271,10 @@ int main(int argc, char** argv) {
                  "base radius R as a fraction of the image diagonal (--points)")
       ->capture_default_str()
       ->needs(points);
+
+  app.add_option("--max-vertices", opt.max_vertices,
+                 "largest accepted number of vertices (max id + 1, or points); memory and time grow with it")
+      ->capture_default_str();
 
   if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
   // The validators above admit only these names.

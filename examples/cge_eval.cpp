@@ -12,7 +12,11 @@
 // an undefined ratio), or with --json one JSON object (null for undefined). Diagnostics go to
 // standard error. Exit codes: 0 success; 1 standard output could not be written; 2 bad usage or
 // bad input (the message names the file and line). Files named by --aligned-out and --curve are
-// never overwritten without --force; one that cannot be written is exit code 1.
+// never overwritten without --force, --image never; each is written beside its name and renamed
+// into place when complete (a failed run leaves the old file); missing folders on the way are
+// created (docs/CLI.md). One that cannot be written is exit code 1.
+// A ground-truth or estimated trajectory repeating a timestamp keeps the later line, as the TUM
+// tools do, with a warning naming the file and line; --duplicate-stamps error refuses such files.
 
 #include <algorithm>
 #include <cmath>
@@ -45,9 +49,9 @@
 #include "cge/mapping/map_image.hpp"
 #include "cge/mapping/semantic_integrity.hpp"
 #include "cge/octomap/semantic_octree.hpp"
+#endif
 
 #include "tool_support.hpp"
-#endif
 
 #ifndef CGE_VERSION_STRING
 #define CGE_VERSION_STRING "unknown"
@@ -76,7 +80,7 @@ struct Options {
   std::string loops_txt;
   std::string loops_csv;
   bool json = false;
-  std::string duplicate_stamps = "error";
+  std::string duplicate_stamps = "last";
   double max_difference_s = m::AssociationSettings{}.max_difference_s;
   double offset_s = m::AssociationSettings{}.offset_s;
   double delta = m::RpeSettings{}.delta;
@@ -125,35 +129,37 @@ m::Trajectory read_trajectory(const std::string& path, const Options& opt) {
     if (e.reason().find("repeats the one") != std::string::npos) {
       throw UsageError(e.source() + ":" + std::to_string(e.line()) + ": " +
                        e.reason().substr(0, e.reason().find(" (")) +
-                       " (the TUM tools keep the later line: pass --duplicate-stamps last to do the same)");
+                       " (--duplicate-stamps error; the default, last, keeps the later line as the TUM tools do)");
     }
     throw;
   }
   for (const std::size_t line : report.replaced_lines) {
-    std::fprintf(stderr, "%s: note: %s:%zu: pose replaced by the next pose with the same timestamp\n", kProgram,
-                 path.c_str(), line);
+    std::fprintf(stderr,
+                 "%s: warning: %s:%zu: pose replaced by the next line, which repeats its timestamp (the TUM tools "
+                 "keep the later line; --duplicate-stamps error refuses the file)\n",
+                 kProgram, path.c_str(), line);
   }
   if (t.empty()) throw UsageError(path + ": the file contains no poses");
   return t;
 }
 
-/// Refuses an existing `path` unless `force` (UsageError naming the flag).
+/// Refuses an existing `path` unless `force`, and a directory always (UsageError naming the flag).
 void check_writable(const std::string& path, const char* flag, bool force) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw UsageError(std::string(flag) + ": '" + path + "' is a folder");
-  if (std::filesystem::exists(path, ec) && !force) {
-    throw UsageError(std::string(flag) + ": '" + path + "' exists (pass --force to overwrite it)");
-  }
+  cge_tool::check_output_file(path, flag, force);
 }
 
-/// Writes `path` through `writer`; OutputError when the file cannot be written.
+/// Writes `path` through `writer`, all or nothing, creating missing folders on the way;
+/// OutputError when the file cannot be written.
 template <typename Writer>
-void write_file(const std::string& path, Writer&& writer) {
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) throw OutputError("cannot write '" + path + "'");
-  writer(file);
-  file.flush();
-  if (!file) throw OutputError("cannot write '" + path + "'");
+void write_file(const std::string& path, const char* flag, Writer&& writer) {
+  cge_tool::CreatedFolders folders;
+  folders.create_parent_of(path, flag);
+  try {
+    cge_tool::replace_file_with_stream(path, writer);
+  } catch (const std::runtime_error& e) {
+    throw OutputError(std::string(flag) + ": " + e.what());
+  }
+  folders.keep();
 }
 
 void add_statistics(Values& v, const std::string& prefix, const std::string& unit, const m::ErrorStatistics& s) {
@@ -182,7 +188,7 @@ Values run_ate(const Options& opt, nlohmann::ordered_json& inputs) {
             {"max_difference_s", opt.max_difference_s},
             {"offset_s", opt.offset_s}};
   if (!opt.aligned_out.empty()) {
-    write_file(opt.aligned_out, [&](std::ostream& f) { m::write_aligned_pairs_csv(f, m::aligned_pairs(gt, est, r)); });
+    write_file(opt.aligned_out, "--aligned-out", [&](std::ostream& f) { m::write_aligned_pairs_csv(f, m::aligned_pairs(gt, est, r)); });
     inputs["aligned_out"] = opt.aligned_out;
   }
   Values v = {count("groundtruth_poses", gt.size()), count("estimate_poses", est.size()),
@@ -221,6 +227,7 @@ Values run_map(const Options& opt, nlohmann::ordered_json& inputs) {
   namespace mp = cge::mapping;
   if (!opt.map_keyframes.empty() && opt.map_sequence.empty()) throw UsageError("map: --keyframes needs --sequence");
   if (!opt.map_trajectory.empty() && opt.map_sequence.empty()) throw UsageError("map: --trajectory needs --sequence");
+  if (!opt.map_image.empty()) check_writable(opt.map_image, "--image", false);
   const auto tree = cge::octomap_adapter::read_color_octree(opt.map_ot);
   inputs["map"] = opt.map_ot;
   const mp::OccupiedVoxels voxels = cge::octomap_adapter::occupied_voxels(*tree);
@@ -262,7 +269,18 @@ Values run_map(const Options& opt, nlohmann::ordered_json& inputs) {
   }
   if (!opt.map_image.empty()) {
     inputs["image"] = opt.map_image;
-    mp::write_png(opt.map_image, mp::render_top_view(voxels));
+    const cv::Mat picture = mp::render_top_view(voxels);
+    cge_tool::CreatedFolders folders;
+    folders.create_parent_of(opt.map_image, "--image");
+    try {
+      cge_tool::replace_file(opt.map_image, [&picture](const std::filesystem::path& temporary) {
+        mp::write_png(temporary, picture, true);
+        return true;
+      });
+    } catch (const std::runtime_error& e) {
+      throw OutputError(std::string("--image: ") + e.what());
+    }
+    folders.keep();
   }
   return v;
 }
@@ -315,7 +333,7 @@ Values run_loops(const Options& opt, nlohmann::ordered_json& inputs) {
     // standard output prints them.
     const std::vector<m::LoopCurvePoint> curve =
         in_file([&] { return m::loop_threshold_curve(gt, rows, column, settings); });
-    write_file(opt.curve, [&](std::ostream& f) {
+    write_file(opt.curve, "--curve", [&](std::ostream& f) {
       f << "threshold,detections,correct_detections,precision,query_recall,event_recall\n";
       for (const m::LoopCurvePoint& p : curve) {
         f << cge_tool::round_trip_number(p.threshold) << ',' << p.evaluation.detections << ','
@@ -403,7 +421,8 @@ int main(int argc, char** argv) {
     sub->add_option("GT", opt.groundtruth, "ground-truth trajectory (TUM format)")->required();
     sub->add_option("EST", opt.estimate, "estimated trajectory (TUM format)")->required();
     sub->add_option("--duplicate-stamps", opt.duplicate_stamps,
-                    "a line repeating the previous timestamp: error, or last (keep the later line, as the TUM tools)")
+                    "a line repeating the previous timestamp: last (keep the later line with a warning, as the TUM "
+                    "tools) or error (refuse the file)")
         ->check(CLI::IsMember({"error", "last"}))
         ->capture_default_str();
   };

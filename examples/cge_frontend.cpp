@@ -92,6 +92,7 @@ struct Options {
   int features = kDefaultFeatures;
   std::uint64_t seed = kDefaultSeed;
   double mad_scale = cge::DepthMADSettings().mad_scale;
+  std::string depth_estimate = cge::to_string(cge::DepthMADSettings().depth_estimate);
   double depth_scale = cge::opencv::tum_depth_units_per_metre;
   std::vector<std::string> dynamic_classes = {kDefaultDynamic};
   float mask_threshold = cge::Yolov8Settings().mask_threshold;
@@ -339,6 +340,8 @@ int run(const Options& opt) {
   }
   cge::DepthMADSettings mad_settings;
   mad_settings.mad_scale = opt.mad_scale;
+  mad_settings.depth_estimate =
+      opt.depth_estimate == "mask_pixels" ? cge::DepthEstimate::mask_pixels : cge::DepthEstimate::box_samples;
   cge::DepthMADFilter<> filter(mad_settings);
   filter.engine.seed(opt.seed);
   const cge::DepthMADResult result =
@@ -375,7 +378,11 @@ int run(const Options& opt) {
                    {"mad_scale", opt.mad_scale},
                    {"samples_per_instance", mad_settings.samples_per_instance},
                    {"disc_radius_px", mad_settings.disc_radius_px},
-                   {"min_valid_samples", mad_settings.min_valid_samples}};
+                   {"min_valid_samples", mad_settings.min_valid_samples},
+                   {"depth_estimate", cge::to_string(mad_settings.depth_estimate)}};
+  if (mad_settings.depth_estimate == cge::DepthEstimate::mask_pixels) {
+    out["filter"]["min_valid_mask_fraction"] = number(mad_settings.min_valid_mask_fraction, kScoreDecimals);
+  }
   Json list = Json::array();
   for (std::size_t i = 0; i < instances.size(); ++i) {
     const cge::SegmentedInstance& s = instances[i];
@@ -399,6 +406,18 @@ int run(const Options& opt) {
                      {"mean_depth_m", number(st.mean_depth_m, kMetreDecimals)},
                      {"mad_m", number(st.mad_m, kMetreDecimals)},
                      {"mad_test_applied", st.mad_test_applied}};
+      // Why the depth test skipped the instance, with the figure that fell short and its minimum.
+      Json skipped = nullptr;
+      if (st.skip_reason == cge::MadSkipReason::too_few_valid_samples) {
+        skipped = {{"reason", cge::to_string(st.skip_reason)},
+                   {"valid_samples", st.valid_samples},
+                   {"min_valid_samples", mad_settings.min_valid_samples}};
+      } else if (st.skip_reason == cge::MadSkipReason::too_little_depth_in_mask) {
+        skipped = {{"reason", cge::to_string(st.skip_reason)},
+                   {"valid_fraction", number(static_cast<double>(st.valid_samples) / st.samples_drawn, kScoreDecimals)},
+                   {"min_valid_mask_fraction", number(mad_settings.min_valid_mask_fraction, kScoreDecimals)}};
+      }
+      item["mad"]["mad_skipped"] = skipped;
     } else {
       item["mad"] = nullptr;  // not a dynamic class: the filter does not look at it
     }
@@ -448,6 +467,11 @@ int main(int argc, char** argv) {
       ->check(unsigned_integer)
       ->capture_default_str();
   app.add_option("--mad-scale", opt.mad_scale, "k: dynamic when |d - mean| < k MAD, >= 0")->capture_default_str();
+  app.add_option("--depth-estimate", opt.depth_estimate,
+                 "where a person's depth statistics come from: box_samples (n random samples in the box, the "
+                 "paper's) or mask_pixels (every mask pixel with depth; docs/SEGMENTATION.md)")
+      ->check(CLI::IsMember({"box_samples", "mask_pixels"}))
+      ->capture_default_str();
   app.add_option("--depth-scale", opt.depth_scale, "depth units per metre (TUM: 5000), > 0")->capture_default_str();
   app.add_option("--dynamic-classes", opt.dynamic_classes, "COCO class names treated as dynamic, comma-separated")
       ->delimiter(',')

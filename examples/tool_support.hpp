@@ -6,9 +6,15 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <stdexcept>
 #include <string>
+#include <system_error>
+#include <vector>
+
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 
@@ -91,6 +97,113 @@ inline CLI::Validator sign_check(bool zero_allowed) {
 }
 inline CLI::Validator at_least_zero() { return sign_check(true); }
 inline CLI::Validator above_zero() { return sign_check(false); }
+
+/// A bad count or size, checked before any work: "<option> must be at most <limit> (<why>), got <value>".
+inline void require_at_most(const char* option, double value, double limit, const char* why) {
+  if (value <= limit) return;
+  char text[160];
+  std::snprintf(text, sizeof text, "%s must be at most %.15g (%s), got %.15g", option, limit, why, value);
+  throw UsageError(text);
+}
+
+/// The one rule of the tools for output locations (docs/CLI.md, "Output files and folders"):
+/// missing folders on the way to an output are created, as `mkdir -p` does, and removed again
+/// (those still empty) when the run fails before its outputs are in place; a part of the path that
+/// exists and is not a folder is a usage error.
+class CreatedFolders {
+ public:
+  CreatedFolders() = default;
+  CreatedFolders(const CreatedFolders&) = delete;
+  CreatedFolders& operator=(const CreatedFolders&) = delete;
+  ~CreatedFolders() {
+    for (auto it = created_.rbegin(); it != created_.rend(); ++it) {
+      std::error_code ec;
+      if (std::filesystem::is_empty(*it, ec) && !ec) std::filesystem::remove(*it, ec);
+    }
+  }
+
+  /// Creates `folder` and its missing parents; `what` names the option in messages.
+  void create(const std::filesystem::path& folder, const std::string& what) {
+    namespace fs = std::filesystem;
+    if (folder.empty()) return;
+    std::vector<fs::path> missing;
+    std::error_code ec;
+    for (fs::path p = folder; !p.empty(); p = p.parent_path()) {
+      const fs::file_status st = fs::status(p, ec);
+      if (fs::is_directory(st)) break;
+      if (fs::exists(st)) throw UsageError(what + ": '" + p.string() + "' exists and is not a folder");
+      missing.push_back(p);
+      if (p == p.parent_path()) break;
+    }
+    for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+      if (!fs::create_directory(*it, ec) && ec) {
+        throw std::runtime_error(what + ": cannot create the folder '" + it->string() + "': " + ec.message());
+      }
+      created_.push_back(*it);
+    }
+  }
+  /// Creates the folder that `file` goes into.
+  void create_parent_of(const std::filesystem::path& file, const std::string& what) {
+    create(file.parent_path(), what);
+  }
+  /// The outputs are in place: the folders stay.
+  void keep() { created_.clear(); }
+
+ private:
+  std::vector<std::filesystem::path> created_;
+};
+
+/// Checks an output file's name before the work: a folder there is refused as a folder, an
+/// existing file unless `force` (UsageError naming `what`, e.g. "--out").
+inline void check_output_file(const std::string& path, const std::string& what, bool force) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty()) throw UsageError(what + " must name a file");
+  const fs::file_status st = fs::status(path, ec);
+  if (fs::is_directory(st)) throw UsageError(what + ": '" + path + "' is a directory, not a file");
+  if (fs::exists(st) && !force) throw UsageError(what + ": '" + path + "' exists (pass --force to overwrite it)");
+}
+
+/// A temporary name beside `path` with the same extension (image writers choose the format by
+/// it): "<folder>/.<name>.partial.<pid><extension>".
+inline std::filesystem::path partial_name(const std::filesystem::path& path) {
+  const std::filesystem::path name = path.filename();
+  return path.parent_path() /
+         ("." + name.stem().string() + ".partial." + std::to_string(::getpid()) + name.extension().string());
+}
+
+/// Replaces `path` with what `write_to(temporary path)` writes, all or nothing: the temporary is
+/// renamed over `path` only when `write_to` returned true, and removed otherwise. A failure
+/// throws std::runtime_error (exit code 1), and `path` is as it was.
+template <typename WriteTo>
+void replace_file(const std::filesystem::path& path, WriteTo&& write_to) {
+  const std::filesystem::path temporary = partial_name(path);
+  std::error_code ec;
+  bool ok = false;
+  try {
+    ok = write_to(temporary);
+  } catch (...) {
+    std::filesystem::remove(temporary, ec);
+    throw;
+  }
+  if (ok) std::filesystem::rename(temporary, path, ec);
+  if (!ok || ec) {
+    std::filesystem::remove(temporary, ec);
+    throw std::runtime_error("cannot write '" + path.string() + "'");
+  }
+}
+
+/// replace_file for a text or binary stream: `writer(std::ostream&)`.
+template <typename Writer>
+void replace_file_with_stream(const std::filesystem::path& path, Writer&& writer) {
+  replace_file(path, [&writer](const std::filesystem::path& temporary) {
+    std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
+    if (!file) return false;
+    writer(file);
+    file.flush();
+    return static_cast<bool>(file);
+  });
+}
 
 /// Parses the command line as every tool does. Returns -1 when the tool should go on; otherwise
 /// the exit code: 0 after --help or --version (CLI11 printed them), kExitUsage after a parse error

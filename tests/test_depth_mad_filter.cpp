@@ -227,6 +227,8 @@ TEST_CASE("DepthMADSettings: paper defaults, and every bad field is named", "[de
   REQUIRE(s.mad_scale == 1.0);             // k, paper
   REQUIRE(s.min_valid_samples == 5);
   REQUIRE_FALSE(s.image_border_is_mask_edge);
+  REQUIRE(s.depth_estimate == cge::DepthEstimate::box_samples);  // the paper's step 2
+  REQUIRE(s.min_valid_mask_fraction == 0.5);
   REQUIRE_NOTHROW(s.validate());
 
   const auto message = [](DepthMADSettings bad) { return cge_test::invalid_argument_message([&] { bad.validate(); }); };
@@ -244,6 +246,14 @@ TEST_CASE("DepthMADSettings: paper defaults, and every bad field is named", "[de
     bad.mad_scale = k;
     REQUIRE_THAT(message(bad), Catch::Contains("mad_scale"));
   }
+  for (const double fraction : {nan_value, -0.1, 1.5}) {
+    bad = {};
+    bad.min_valid_mask_fraction = fraction;
+    REQUIRE_THAT(message(bad), Catch::Contains("min_valid_mask_fraction"));
+  }
+  bad = {};
+  bad.depth_estimate = static_cast<cge::DepthEstimate>(7);
+  REQUIRE_THAT(message(bad), Catch::Contains("depth_estimate"));
   // The filter validates its settings on every call.
   DepthMADFilter<> f;
   f.settings.mad_scale = nan_value;
@@ -671,6 +681,155 @@ TEST_CASE("statistics and labels equal an independent re-derivation from the sam
       }
     }
   }
+}
+
+// ---- the mask_pixels estimate against a brute-force oracle ---------------------------------------------
+
+namespace {
+
+/// d_j and MAD_j over every pixel that is in the mask, in the box's pixels and has depth, found by
+/// scanning the whole image; the test needs min_valid of them and the fraction of the mask's
+/// pixels in the box.
+OracleStats oracle_mask_stats(const FloatDepthImage& depth, const BinaryMask& mask, const PixelBox& box,
+                              const DepthMADSettings& s) {
+  OracleStats o;
+  std::vector<double> d;
+  int mask_pixels = 0;
+  for (int r = 0; r < depth.height; ++r) {
+    for (int c = 0; c < depth.width; ++c) {
+      const bool in_box = c >= std::floor(box.x_min_px) && c < std::ceil(box.x_max_px()) &&
+                          r >= std::floor(box.y_min_px) && r < std::ceil(box.y_max_px());
+      if (!in_box || mask.at(c, r) == 0) continue;
+      ++mask_pixels;
+      const double v = depth.at(c, r);
+      if (v > 0 && !std::isinf(v)) {
+        d.push_back(v);
+      } else {
+        ++o.invalid_depth;
+      }
+    }
+  }
+  o.valid = static_cast<int>(d.size());
+  o.applied = o.valid >= s.min_valid_samples && o.valid >= s.min_valid_mask_fraction * mask_pixels;
+  if (!d.empty()) {
+    double sum = 0;
+    for (const double v : d) sum += v;
+    o.mean = sum / static_cast<double>(d.size());
+    double dev = 0;
+    for (const double v : d) dev += std::abs(v - o.mean);
+    o.mad = dev / static_cast<double>(d.size());
+  }
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("mask_pixels: statistics and labels equal a scan of the whole image, nothing drawn",
+          "[depth_mad][oracle][mask_pixels]") {
+  const int width = 48, height = 40;
+  for (const std::uint64_t seed : {3ull, 17ull, 20251202ull}) {
+    for (const double hole_rate : {0.1, 0.7}) {  // enough depth in the masks, and too little
+      std::mt19937_64 fixture(seed);
+      const auto uniform = [&](double lo, double hi) {
+        return lo + (hi - lo) * std::ldexp(static_cast<double>(fixture() >> 11), -53);
+      };
+      FloatDepthImage depth(width, height);
+      for (float& d : depth.depth_m) d = static_cast<float>(uniform(0.5, 4.0));
+      std::vector<BinaryMask> masks(2, BinaryMask(width, height));
+      const double cx[2] = {14, 36}, cy[2] = {18, 26}, ax[2] = {10, 9}, ay[2] = {14, 12};
+      for (int j = 0; j < 2; ++j) {
+        for (int r = 0; r < height; ++r)
+          for (int c = 0; c < width; ++c) {
+            const double u = (c - cx[j]) / ax[j], v = (r - cy[j]) / ay[j];
+            if (u * u + v * v > 1) continue;
+            masks[j].at(c, r) = 1;
+            const double roll = uniform(0, 1);
+            depth.at(c, r) = roll < hole_rate / 2 ? 0.0f
+                             : roll < hole_rate   ? nan_float
+                                                  : static_cast<float>(1.0 + 0.4 * uniform(0, 1));
+          }
+      }
+      // The second box cuts its ellipse: mask pixels outside the box do not count.
+      const std::vector<PixelBox> boxes{PixelBox{3.5, 3.0, 22.0, 30.5}, PixelBox{30.0, 18.25, 18.0, 21.75}};
+      Keypoints kps;
+      for (int i = 0; i < 400; ++i) kps.push_back({uniform(0, width), uniform(0, height)});
+      for (const double k : {1.0, 2.0}) {
+        DepthMADSettings s = settings_with(100, 6, 5, k);
+        s.depth_estimate = cge::DepthEstimate::mask_pixels;
+        DepthMADFilter<ScriptedEngine> f(s);
+        f.engine.script = {0.5};
+        const Instances inst{cge::dynamic_instance(masks[0], boxes[0], 0), cge::dynamic_instance(masks[1], boxes[1], 0)};
+        const DepthMADResult r = f.filter(kps, depth, inst);
+        REQUIRE(f.engine.draws == 0);
+        std::vector<OracleStats> os;
+        for (int j = 0; j < 2; ++j) os.push_back(oracle_mask_stats(depth, masks[j], boxes[j], s));
+        for (int j = 0; j < 2; ++j) {
+          INFO("seed " << seed << " holes " << hole_rate << " instance " << j);
+          const cge::InstanceDepthStats& got = r.instances[static_cast<std::size_t>(j)];
+          REQUIRE(got.valid_samples == os[j].valid);
+          REQUIRE(got.samples_invalid_depth == os[j].invalid_depth);
+          REQUIRE(got.samples_drawn == os[j].valid + os[j].invalid_depth);
+          REQUIRE(got.samples_off_mask == 0);
+          REQUIRE(got.mad_test_applied == os[j].applied);
+          REQUIRE(got.mad_test_applied == (hole_rate < 0.5));  // the fixture exercises both outcomes
+          REQUIRE(got.skip_reason == (got.mad_test_applied ? cge::MadSkipReason::none
+                                                           : cge::MadSkipReason::too_little_depth_in_mask));
+          REQUIRE(got.mean_depth_m == Approx(os[j].mean).epsilon(1e-12));
+          REQUIRE(got.mad_m == Approx(os[j].mad).epsilon(1e-12));
+        }
+        const std::vector<FeatureLabel> expected = oracle_labels(kps, depth, masks, boxes, os, k);
+        REQUIRE(r.labels == expected);
+        REQUIRE(r.dynamic_by_mad_count == count_label(expected, FeatureLabel::dynamic_by_mad));
+        if (hole_rate < 0.5) REQUIRE(r.dynamic_by_mad_count > 0);
+      }
+    }
+  }
+}
+
+TEST_CASE("skip reasons: too few valid samples, too little depth in the mask", "[depth_mad][rules][mask_pixels]") {
+  // A 10 x 10 mask in a 20 x 20 image; depth 1 m on 30 of its 100 pixels (rows 0 .. 2 of the mask).
+  FloatDepthImage depth(20, 20, 0.0f);
+  BinaryMask mask(20, 20);
+  fill_rect(mask, 5, 5, 14, 14);
+  for (int r = 5; r <= 7; ++r)
+    for (int c = 5; c <= 14; ++c) depth.at(c, r) = 1.0f;
+  const Instances inst{cge::dynamic_instance(mask, PixelBox{5, 5, 10, 10})};
+
+  DepthMADSettings s = settings_with(100, 0, 5);
+  s.depth_estimate = cge::DepthEstimate::mask_pixels;
+  DepthMADFilter<> f(s);
+  cge::InstanceDepthStats st = f.filter(Keypoints{}, depth, inst).instances[0];
+  CHECK(st.samples_drawn == 100);
+  CHECK(st.valid_samples == 30);
+  CHECK(st.samples_invalid_depth == 70);
+  CHECK_FALSE(st.mad_test_applied);
+  CHECK(st.skip_reason == cge::MadSkipReason::too_little_depth_in_mask);  // 0.3 < 0.5
+  CHECK(st.mean_depth_m == 1.0);                                          // reported all the same
+  f.settings.min_valid_mask_fraction = 0.3;                                // 30 >= 0.3 * 100
+  st = f.filter(Keypoints{}, depth, inst).instances[0];
+  CHECK(st.mad_test_applied);
+  CHECK(st.skip_reason == cge::MadSkipReason::none);
+  f.settings.min_valid_samples = 31;  // the count is checked first
+  st = f.filter(Keypoints{}, depth, inst).instances[0];
+  CHECK(st.skip_reason == cge::MadSkipReason::too_few_valid_samples);
+
+  // box_samples with no depth anywhere: every sample invalid, too few.
+  DepthMADFilter<> g(settings_with(40, 0, 5));
+  g.engine.seed(1);
+  st = g.filter(Keypoints{}, FloatDepthImage(20, 20, 0.0f), inst).instances[0];
+  CHECK(st.valid_samples == 0);
+  CHECK(st.samples_invalid_depth == 40);
+  CHECK_FALSE(st.mad_test_applied);
+  CHECK(st.skip_reason == cge::MadSkipReason::too_few_valid_samples);
+  st = g.filter(Keypoints{}, depth, inst).instances[0];
+  CHECK(st.mad_test_applied == (st.valid_samples >= 5));
+  CHECK(st.skip_reason == (st.mad_test_applied ? cge::MadSkipReason::none : cge::MadSkipReason::too_few_valid_samples));
+
+  CHECK(std::string(cge::to_string(cge::MadSkipReason::none)) == "none");
+  CHECK(std::string(cge::to_string(cge::MadSkipReason::too_few_valid_samples)) == "too_few_valid_samples");
+  CHECK(std::string(cge::to_string(cge::MadSkipReason::too_little_depth_in_mask)) == "too_little_depth_in_mask");
+  CHECK(std::string(cge::to_string(cge::DepthEstimate::box_samples)) == "box_samples");
+  CHECK(std::string(cge::to_string(cge::DepthEstimate::mask_pixels)) == "mask_pixels");
 }
 
 // ---- determinism ------------------------------------------------------------------------------------

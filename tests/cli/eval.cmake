@@ -78,10 +78,25 @@ cge_cli_test(eval_bad_quaternion PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt ev
   STDERR "eval/bad_quaternion\\.txt:2: quaternion norm 1\\.249[0-9]* is not close to 1")
 cge_cli_test(eval_bad_order PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt eval/bad_order.txt
   STDERR "eval/bad_order\\.txt:3: timestamp 2\\.0 does not come after the one on line 2")
-cge_cli_test(eval_duplicate PROGRAM cge_eval EXIT 2 ARGS ate eval/duplicate.txt eval/est.txt
-  STDERR "eval/duplicate\\.txt:3: timestamp 2\\.0000 repeats the one on line 2" "--duplicate-stamps last")
+# A repeated timestamp (as in the official fr3/walking_static and fr2/desk ground truth): the TUM
+# tools keep the later line, and so does the default, with a warning naming the file and line.
+cge_cli_test(eval_duplicate PROGRAM cge_eval ARGS ate eval/duplicate.txt eval/est.txt
+  STDOUT "groundtruth_poses 6" "compared_pose_pairs 6" STDERR "^cge_eval: warning: eval/duplicate\\.txt:2: pose replaced")
+cge_cli_test(eval_duplicate_strict PROGRAM cge_eval EXIT 2 ARGS ate eval/duplicate.txt eval/est.txt --duplicate-stamps error
+  STDERR "eval/duplicate\\.txt:3: timestamp 2\\.0000 repeats the one on line 2" "--duplicate-stamps error")
 cge_cli_test(eval_duplicate_last PROGRAM cge_eval ARGS ate eval/duplicate.txt eval/est.txt --duplicate-stamps last
   STDOUT "groundtruth_poses 6" "compared_pose_pairs 6" STDERR "duplicate\\.txt:2: pose replaced")
+# No silent wrong numbers: two pairs fit a rigid alignment exactly (ATE 0 whatever the estimate), a
+# delta far beyond the trajectory paired every pose with the first, a duplicated loops.csv row
+# counted twice.
+cge_cli_test(eval_ate_two_pairs PROGRAM cge_eval EXIT 2 ARGS ate eval/gt_two_poses.txt eval/est.txt
+  STDERR "ATE: only 2 pose pair\\(s\\) associate; at least 3")
+cge_cli_test(eval_rpe_huge_delta PROGRAM cge_eval EXIT 2 ARGS rpe eval/rpe_gt.txt eval/rpe_est.txt --delta 1e16
+  STDERR "delta 1e\\+16 s is not shorter than the estimate's span of 10 s")
+cge_cli_test(eval_rpe_huge_delta_frames PROGRAM cge_eval EXIT 2
+  ARGS rpe eval/rpe_gt.txt eval/rpe_est.txt --delta 1e16 --delta-unit frames STDERR "span of 100 frames")
+cge_cli_test(eval_loops_duplicate_row PROGRAM cge_eval EXIT 2 ARGS loops eval/loops.txt eval/loops_duplicate_row.csv
+  STDERR "eval/loops_duplicate_row\\.csv:10: query_keyframe 7 repeats the row on line 3")
 cge_cli_test(eval_empty PROGRAM cge_eval EXIT 2 ARGS ate empty.txt eval/est.txt STDERR "empty\\.txt: the file contains no poses")
 cge_cli_test(eval_missing PROGRAM cge_eval EXIT 2 ARGS ate eval/gt.txt eval/no_such_file.txt
   STDERR "cannot open 'eval/no_such_file\\.txt'")
@@ -132,6 +147,12 @@ if(TARGET cge_pipeline)
     STDOUT "occupied_voxels 3" "entities 0" "integrity 0")
   cge_cli_test(eval_map_bt PROGRAM cge_eval EXIT 2 ARGS map eval/map3.bt STDERR "is not an OctoMap \\.ot file")
   cge_cli_test(eval_map_missing PROGRAM cge_eval EXIT 2 ARGS map eval/no_such_map.ot STDERR "is not a readable file")
+  # A truncated octree (the header and 100 of its 152 node bytes) is refused, not read as another
+  # map; a folder is called a folder; OctoMap's own chatter stays off standard error.
+  cge_cli_test(eval_map_truncated PROGRAM cge_eval EXIT 2 ARGS map eval/map3_truncated.ot
+    STDERR "^cge_eval: error: read_color_octree: eval/map3_truncated\\.ot is truncated or corrupt: the data ends after 12 of 19 nodes")
+  cge_cli_test(eval_map_quiet PROGRAM cge_eval ARGS map eval/map3.ot STDOUT "occupied_voxels 3" STDERR "^$")
+  cge_cli_test(eval_map_folder PROGRAM cge_eval EXIT 2 ARGS map eval STDERR "^cge_eval: error: read_color_octree: eval is a directory")
   cge_cli_test(eval_map_keyframes_without_sequence PROGRAM cge_eval EXIT 2 ARGS map eval/map3.ot --keyframes eval/gt.txt
     STDERR "--keyframes needs --sequence")
   cge_cli_test(eval_map_trajectory_without_sequence PROGRAM cge_eval EXIT 2 ARGS map eval/map3.ot --trajectory eval/gt.txt

@@ -16,7 +16,7 @@ cge_cli_test(frontend_masks PROGRAM cge_frontend ${fe_masks}
          [[ *"width": 32\.0,]] [[ *"height": 72\.0]] [[ *"mask_area_px": 1968,]]
          [[ *"samples_drawn": 100,]] [[ *"valid_samples": [1-9][0-9]*,]] [[ *"samples_invalid_depth": 0,]]
          [[ *"mean_depth_m": (1\.9[0-9]*|2\.0[0-9]*|2\.1),]] [[ *"mad_m": (0\.0[0-9]*[1-9][0-9]*|0\.1),]]
-         [[ *"mad_test_applied": true]]
+         [[ *"mad_test_applied": true,]] [[ *"mad_skipped": null]]
          # the chair: not a dynamic class
          [[ *"class_name": "chair",]] [[ *"dynamic": false,]] [[ *"mask_area_px": 900,]] [[ *"mad": null]]
          # the eight corners in the notch are caught by the depth test, features in the mask by the mask
@@ -63,6 +63,8 @@ cge_cli_test(frontend_bad_class EXIT 2 PROGRAM cge_frontend ${fe_masks} --dynami
   STDERR "--dynamic-classes: 'persn' is not a COCO class name")
 cge_cli_test(frontend_threshold_needs_model EXIT 2 PROGRAM cge_frontend ${fe_masks} --mask-threshold 0.4
   STDERR "--mask-threshold requires --model")
+cge_cli_test(frontend_bad_depth_estimate EXIT 2 PROGRAM cge_frontend ${fe_masks} --depth-estimate everything
+  STDERR "--depth-estimate")
 cge_cli_test(frontend_bad_decoding EXIT 2 PROGRAM cge_frontend ARGS --rgb frontend/rgb.png --depth frontend/depth.png
                                                           --model frontend/rgb.png --mask-decoding best
   STDERR "--mask-decoding")
@@ -150,14 +152,27 @@ if(EXISTS ${fe_model} AND EXISTS ${fe_rgb} AND EXISTS ${fe_depth})
   cge_cli_test(frontend_tum_yolov8 PROGRAM cge_frontend
     ARGS --rgb ${fe_rgb} --depth ${fe_depth} --model ${fe_model} --out-image ${fe_out}/frontend_tum.png --force
     STDOUT [[ *"source": "yolov8",]] [[ *"input_size": .]] [[ *"class_name": "person",]] [[ *"dynamic": true,]]
-           [[ *"mad_test_applied": true]] [[ *"dynamic_by_mask": [1-9][0-9]*,]] [[ *"detected": 1000,]]
+           [[ *"mad_test_applied": true,]] [[ *"dynamic_by_mask": [1-9][0-9]*,]] [[ *"detected": 1000,]]
            [[ *"out_image": ".*frontend_tum\.png"]]
-    STDOUT_NOT [[ *"mad_test_applied": false]])
+    STDOUT_NOT [[ *"mad_test_applied": false,]])
   cge_cli_test(frontend_tum_retina PROGRAM cge_frontend
     ARGS --rgb ${fe_rgb} --depth ${fe_depth} --model ${fe_model} --mask-decoding retina --mask-threshold 0.5
     STDOUT [[ *"mask_decoding": "retina",]] [[ *"class_name": "person",]])
+  # The frame with almost no depth on the people: the report says why the MAD test was skipped.
+  set(fe_no_depth ARGS --rgb ${fe_tum}/rgb/1341846316.570121.png --depth ${fe_tum}/depth/1341846316.570146.png
+                       --model ${fe_model})
+  cge_cli_test(frontend_tum_mad_skipped PROGRAM cge_frontend ${fe_no_depth}
+    STDOUT [[ *"depth_estimate": "box_samples"]] [[ *"mad_test_applied": false,]] [[ *"mad_skipped": {]]
+           [[ *"reason": "too_few_valid_samples",]] [[ *"valid_samples": [0-4],]] [[ *"min_valid_samples": 5]]
+           [[ *"dynamic_by_mad": 0]]
+    STDOUT_NOT [[ *"mad_test_applied": true,]])
+  cge_cli_test(frontend_tum_mask_pixels_skipped PROGRAM cge_frontend ${fe_no_depth} --depth-estimate mask_pixels
+    STDOUT [[ *"depth_estimate": "mask_pixels",]] [[ *"min_valid_mask_fraction": 0\.5]]
+           [[ *"reason": "too_little_depth_in_mask",]] [[ *"valid_fraction": 0\.0[0-9]*,]]
+           [[ *"min_valid_mask_fraction": 0\.5]] [[ *"dynamic_by_mad": 0]]
+    STDOUT_NOT [[ *"mad_test_applied": true,]])
 else()
-  foreach(fe_name frontend_tum_yolov8 frontend_tum_retina)
+  foreach(fe_name frontend_tum_yolov8 frontend_tum_retina frontend_tum_mad_skipped frontend_tum_mask_pixels_skipped)
     add_test(NAME cli.${fe_name} COMMAND ${CMAKE_COMMAND} -E echo
              "skipped: ${fe_model} or the TUM frame ${fe_rgb} is absent")
     set_tests_properties(cli.${fe_name} PROPERTIES SKIP_REGULAR_EXPRESSION "skipped: ")

@@ -7,6 +7,8 @@
 # STDOUT_<i>: some line of standard output matches the regex as a whole (anchored ^...$).
 # STDOUT_NOT_<i>: no line of standard output matches it (anchored).
 # STDERR_<i>: the regex is found somewhere in standard error (not anchored).
+# MEMORY_KB: run the program under `ulimit -v MEMORY_KB` (through /bin/sh), for inputs that once
+# exhausted memory.
 # EXIT defaults to 0. A failing run (EXIT != 0) must say something on stderr and nothing on stdout.
 # Relative paths are taken from the working directory ctest runs the test in.
 cmake_minimum_required(VERSION 3.16)
@@ -30,7 +32,11 @@ if(NOT DEFINED STDIN)
   set(STDIN "${CMAKE_CURRENT_LIST_DIR}/empty.txt")
 endif()
 
-execute_process(COMMAND "${EXE}" ${args}
+set(command "${EXE}" ${args})
+if(DEFINED MEMORY_KB)
+  set(command /bin/sh -c "ulimit -v ${MEMORY_KB} && exec \"$0\" \"$@\"" "${EXE}" ${args})
+endif()
+execute_process(COMMAND ${command}
                 INPUT_FILE "${STDIN}"
                 RESULT_VARIABLE rc
                 OUTPUT_VARIABLE out

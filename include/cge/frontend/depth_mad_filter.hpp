@@ -9,7 +9,8 @@
 // cge/frontend/pixel_box.hpp); a sample p_i of a box lies on pixel (floor(p_x), floor(p_y)).
 //
 // Determinism: the only randomness is the public `engine`, which the caller seeds. A call draws
-// exactly 2 * samples_per_instance uniform doubles per instance (cge/core/uniform_double.hpp,
+// exactly 2 * samples_per_instance uniform doubles per instance with DepthEstimate::box_samples
+// (none with mask_pixels) (cge/core/uniform_double.hpp,
 // identical on every standard library), instance by instance in input order, x before y, and
 // nothing else. Same input and same engine state: bit-identical result. The engine advances from
 // call to call; reseed it per frame (e.g. with the frame index) to make a frame's labels depend on
@@ -41,6 +42,41 @@
 
 namespace cge {
 
+/// Where an instance's depth statistics (d_j, MAD_j) come from.
+enum class DepthEstimate {
+  /// n random samples in the box, valid when the disc of radius r around the sample lies in the
+  /// mask and the sample has depth (the paper's step 2).
+  box_samples,
+  /// every pixel of the box that is in the mask and has depth; no randomness (ours: on the TUM
+  /// frame with depth on the people it caught every edge feature, docs/SEGMENTATION.md).
+  mask_pixels,
+};
+
+/// "box_samples" or "mask_pixels".
+inline const char* to_string(DepthEstimate estimate) {
+  return estimate == DepthEstimate::mask_pixels ? "mask_pixels" : "box_samples";
+}
+
+/// Why an instance got no MAD test.
+enum class MadSkipReason {
+  none,                      ///< the test was applied
+  too_few_valid_samples,     ///< valid_samples < min_valid_samples
+  too_little_depth_in_mask,  ///< mask_pixels: valid / mask pixels < min_valid_mask_fraction
+};
+
+/// "none", "too_few_valid_samples", "too_little_depth_in_mask".
+inline const char* to_string(MadSkipReason reason) {
+  switch (reason) {
+    case MadSkipReason::none:
+      return "none";
+    case MadSkipReason::too_few_valid_samples:
+      return "too_few_valid_samples";
+    case MadSkipReason::too_little_depth_in_mask:
+      return "too_little_depth_in_mask";
+  }
+  return "unknown";
+}
+
 struct DepthMADSettings {
   /// n: random samples drawn in each instance's box (paper: 100).
   int samples_per_instance = 100;
@@ -55,6 +91,14 @@ struct DepthMADSettings {
   /// false (ours, as cv::erode's default border): disc pixels outside the image are ignored, since
   /// the image border cuts an object rather than bounding it. true: they count as outside the mask.
   bool image_border_is_mask_edge = false;
+  /// Where d_j and MAD_j come from (box_samples: the paper's step 2). samples_per_instance,
+  /// disc_radius_px and image_border_is_mask_edge apply to box_samples only.
+  DepthEstimate depth_estimate = DepthEstimate::box_samples;
+  /// mask_pixels: the MAD test also needs at least this fraction of the mask's pixels in the box to
+  /// have depth, in [0, 1] (ours: 0.5; on TUM fr3 walking_xyz a mask with depth on the person had
+  /// 80 to 96 % of its pixels valid, one whose depth was lost 4 to 6 %, and the few valid pixels
+  /// of the latter were mostly background, which the test would then have dropped).
+  double min_valid_mask_fraction = 0.5;
 
   /// Throws std::invalid_argument naming the bad field.
   void validate() const {
@@ -63,6 +107,12 @@ struct DepthMADSettings {
     if (disc_radius_px < 0) fail("disc_radius_px must not be negative");
     if (min_valid_samples < 1) fail("min_valid_samples must be at least 1");
     if (!(std::isfinite(mad_scale) && mad_scale >= 0)) fail("mad_scale must be finite and not negative");
+    if (depth_estimate != DepthEstimate::box_samples && depth_estimate != DepthEstimate::mask_pixels) {
+      fail("depth_estimate is not box_samples or mask_pixels");
+    }
+    if (!(min_valid_mask_fraction >= 0 && min_valid_mask_fraction <= 1)) {
+      fail("min_valid_mask_fraction must lie in [0, 1]");
+    }
   }
 };
 
@@ -85,13 +135,15 @@ DynamicInstance<Mask> dynamic_instance(const Mask& mask, const PixelBox& box_px,
 template <typename Mask>
 DynamicInstance<Mask> dynamic_instance(const Mask&& mask, const PixelBox& box_px, int class_id = 0) = delete;
 
-/// What one instance's samples gave (step 2).
+/// What one instance's samples gave (step 2). With DepthEstimate::mask_pixels every mask pixel in
+/// the box is a sample: samples_drawn counts them, samples_off_mask is 0.
 struct InstanceDepthStats {
-  int samples_drawn = 0;          ///< n
+  int samples_drawn = 0;          ///< n (mask_pixels: the mask's pixels in the box)
   int valid_samples = 0;          ///< disc inside the mask and valid depth
   int samples_off_mask = 0;       ///< rejected: the disc around the sample leaves the mask
   int samples_invalid_depth = 0;  ///< rejected: disc inside the mask, but no depth at the sample
-  bool mad_test_applied = false;  ///< valid_samples >= min_valid_samples
+  bool mad_test_applied = false;  ///< valid_samples >= min_valid_samples (mask_pixels: and the fraction)
+  MadSkipReason skip_reason = MadSkipReason::none;  ///< why the test was not applied
   /// d_j and MAD_j over the valid samples, metres; NaN when there is none. Reported whenever
   /// valid_samples > 0, even when too few for the MAD test.
   double mean_depth_m = std::numeric_limits<double>::quiet_NaN();
@@ -284,14 +336,36 @@ class DepthMADFilter {
     int col, row;
   };
 
-  /// Step 2 for one instance: draws the samples, keeps the valid ones (in valid_depths, a reused
-  /// buffer) and reduces them, summing in sample order.
+  /// Step 2 for one instance: draws the samples (box_samples) or visits the mask's pixels in the
+  /// box row by row (mask_pixels), keeps the valid depths (in valid_depths, a reused buffer) and
+  /// reduces them, summing in sample order.
   template <typename Depth, typename Mask>
   InstanceDepthStats estimate(const Depth& depth, const Mask& mask, const PixelBox& box, const PixelSpan& span,
                               int width, int height, std::vector<double>& valid_depths) {
     InstanceDepthStats s;
-    s.samples_drawn = settings.samples_per_instance;
     valid_depths.clear();
+    if (settings.depth_estimate == DepthEstimate::mask_pixels) {
+      for (int row = span.row_begin; row < span.row_end; ++row) {
+        for (int col = span.col_begin; col < span.col_end; ++col) {
+          if (!traits::Mask<Mask>::is_set(mask, col, row)) continue;
+          ++s.samples_drawn;
+          const double d = static_cast<double>(traits::DepthImage<Depth>::depth_m(depth, col, row));
+          if (is_valid_depth_m(d)) {
+            valid_depths.push_back(d);
+          } else {
+            ++s.samples_invalid_depth;
+          }
+        }
+      }
+      reduce(valid_depths, s);
+      if (s.mad_test_applied &&
+          static_cast<double>(s.valid_samples) < settings.min_valid_mask_fraction * s.samples_drawn) {
+        s.mad_test_applied = false;
+        s.skip_reason = MadSkipReason::too_little_depth_in_mask;
+      }
+      return s;
+    }
+    s.samples_drawn = settings.samples_per_instance;
     const double centre_x = box.centre_x_px();
     const double centre_y = box.centre_y_px();
     for (int i = 0; i < settings.samples_per_instance; ++i) {
@@ -315,8 +389,15 @@ class DepthMADFilter {
       }
       valid_depths.push_back(d);
     }
+    reduce(valid_depths, s);
+    return s;
+  }
+
+  /// valid_samples, the test's minimum and the mean and MAD of the valid depths, summed in order.
+  void reduce(const std::vector<double>& valid_depths, InstanceDepthStats& s) const {
     s.valid_samples = static_cast<int>(valid_depths.size());
     s.mad_test_applied = s.valid_samples >= settings.min_valid_samples;
+    if (!s.mad_test_applied) s.skip_reason = MadSkipReason::too_few_valid_samples;
     if (s.valid_samples > 0) {
       const double n_valid = static_cast<double>(s.valid_samples);
       double sum = 0;
@@ -326,7 +407,6 @@ class DepthMADFilter {
       for (const double d : valid_depths) deviation_sum += std::abs(d - s.mean_depth_m);
       s.mad_m = deviation_sum / n_valid;
     }
-    return s;
   }
 };
 

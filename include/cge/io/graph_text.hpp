@@ -61,6 +61,8 @@ struct EdgeListOptions {
   /// Largest accepted number of vertices (max id + 1). The graph allocates per vertex, so a stray
   /// huge id would otherwise ask for gigabytes; raise it for genuinely large graphs.
   std::int32_t max_vertices = std::int32_t(1) << 24;
+  /// How messages name max_vertices (a tool passes its option, e.g. "--max-vertices").
+  std::string max_vertices_name = "EdgeListOptions::max_vertices";
 };
 
 /// The records of a point list, in file order.
@@ -145,8 +147,8 @@ inline std::int32_t parse_vertex_id(const std::pair<const char*, const char*>& f
   const std::uint64_t limit = static_cast<std::uint64_t>(options.max_vertices) - 1 + lowest;
   if (r.ec != std::errc() || value > limit) {
     throw ParseError(source, line,
-                     "vertex id " + quoted(field) + " is too large (at most " + std::to_string(limit) +
-                         ": EdgeListOptions::max_vertices is " + std::to_string(options.max_vertices) + ")");
+                     "vertex id " + quoted(field) + " is too large (at most " + std::to_string(limit) + ": " +
+                         options.max_vertices_name + " is " + std::to_string(options.max_vertices) + ")");
   }
   return static_cast<std::int32_t>(value - lowest);
 }

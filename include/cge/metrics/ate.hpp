@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -23,6 +24,11 @@ namespace metrics {
 
 struct AteSettings {
   AssociationSettings association;  ///< offset 0 s, max difference 0.02 s, as evaluate_ate.py
+  /// Fewest associated pairs the ATE is computed from, >= 1. A rigid alignment fits one or two
+  /// positions exactly, so with fewer than three pairs the ATE is 0 whatever the estimate (a
+  /// silent wrong number); evaluate_ate.py has no such check. Default 3, the fewest points that
+  /// determine a rigid transform in 3-D.
+  std::size_t min_pairs = 3;
 };
 
 struct AteResult {
@@ -32,7 +38,8 @@ struct AteResult {
   ErrorStatistics translation_m;                                             ///< statistics of errors_m, metres
 };
 
-/// Throws std::invalid_argument for invalid trajectories or when no timestamp associates.
+/// Throws std::invalid_argument for invalid trajectories, when no timestamp associates, or when
+/// fewer than settings.min_pairs pairs associate.
 inline AteResult compute_ate(const Trajectory& ground_truth, const Trajectory& estimate,
                              const AteSettings& settings = {}) {
   require_valid_trajectory(ground_truth, "ATE ground truth");
@@ -43,6 +50,11 @@ inline AteResult compute_ate(const Trajectory& ground_truth, const Trajectory& e
     throw std::invalid_argument(
         "ATE: no timestamp of the estimate lies within the maximum difference of a "
         "ground-truth timestamp (wrong files, or a time offset?)");
+  }
+  if (result.matches.size() < settings.min_pairs) {
+    throw std::invalid_argument("ATE: only " + std::to_string(result.matches.size()) +
+                                " pose pair(s) associate; at least " + std::to_string(settings.min_pairs) +
+                                " are needed (the rigid alignment fits fewer exactly, so their ATE would be 0)");
   }
   std::vector<Eigen::Vector3d> p_estimate, p_groundtruth;
   p_estimate.reserve(result.matches.size());

@@ -17,6 +17,8 @@
 //     RANSAC of the reported check; geometric checks run);
 //   - connected_keyframes: the keyframe ids covisible with the query when it was processed (never
 //     candidates), ascending, separated by single spaces; empty for none.
+// The loop closer processes each keyframe once: a query_keyframe given on two rows is an error
+// (a duplicated row would otherwise count twice).
 // Lines that are blank or start with '#' are skipped. A malformed line throws ParseError.
 
 #include <cmath>
@@ -25,6 +27,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 #include "cge/metrics/text_input.hpp"
@@ -58,6 +61,7 @@ inline constexpr const char* kLoopQueriesExtraColumns = ",tentative_matches,veri
 
 inline std::vector<LoopQuery> read_loop_queries(std::istream& in, const std::string& source) {
   std::vector<LoopQuery> rows;
+  std::unordered_map<long long, std::size_t> line_of_query;  // query_keyframe -> its row's line
   detail::LineReader reader(in, source);
   std::string line;
   bool header_seen = false;
@@ -106,6 +110,11 @@ inline std::vector<LoopQuery> read_loop_queries(std::istream& in, const std::str
     const std::optional<long long> query_keyframe = optional_count(f[2], "query_keyframe");
     if (!query_keyframe) reader.fail("query_keyframe is empty");
     row.query_keyframe = *query_keyframe;
+    const auto first = line_of_query.emplace(row.query_keyframe, row.line);
+    if (!first.second) {
+      reader.fail("query_keyframe " + std::to_string(row.query_keyframe) + " repeats the row on line " +
+                  std::to_string(first.first->second) + " (each keyframe is queried once)");
+    }
     row.match_keyframe = optional_count(f[3], "match_keyframe");
     row.bow_score = optional_number(f[4], "bow_score");
     row.cge_score = optional_number(f[5], "cge_score");

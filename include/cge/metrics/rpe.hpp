@@ -24,6 +24,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -106,7 +107,8 @@ inline double rotation_angle_rad(const Eigen::Matrix3d& R) {
 }  // namespace detail
 
 /// Throws std::invalid_argument for invalid settings or trajectories (ground truth with fewer than
-/// two poses included), too little timestamp overlap, or fewer than two evaluable pairs.
+/// two poses included), a delta not shorter than the estimate's span, too little timestamp
+/// overlap, or fewer than two evaluable pairs.
 inline RpeResult compute_rpe(const Trajectory& ground_truth, const Trajectory& estimate,
                              const RpeSettings& settings = {}) {
   if (!(std::isfinite(settings.delta) && settings.delta > 0)) {
@@ -125,6 +127,18 @@ inline RpeResult compute_rpe(const Trajectory& ground_truth, const Trajectory& e
 
   const std::vector<double> stamps_gt = timestamps(ground_truth);
   const std::vector<double> stamps_est = timestamps(estimate);
+  // A delta as long as the estimate pairs nothing (the pair ending on the last pose is dropped);
+  // a far longer one would make every distance to index + delta round to the same double, and the
+  // closest-index search would then pair poses with the first one: refuse it before the search.
+  const bool in_seconds = settings.delta_unit == RpeDeltaUnit::seconds;
+  const double span = in_seconds ? stamps_est.back() - stamps_est.front() : static_cast<double>(estimate.size() - 1);
+  if (!(settings.delta < span)) {
+    std::ostringstream message;
+    message.precision(15);
+    message << "RPE: fewer than two pose pairs: delta " << settings.delta << (in_seconds ? " s" : " frames")
+            << " is not shorter than the estimate's span of " << span << (in_seconds ? " s" : " frames");
+    throw std::invalid_argument(message.str());
+  }
 
   // 1. Overlap: distinct estimated stamps reached by estimate -> closest gt -> closest estimate.
   std::vector<std::size_t> returned;

@@ -20,9 +20,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iostream>
 #include <iterator>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -98,17 +102,132 @@ inline mapping::OccupiedVoxels occupied_voxels(const octomap::ColorOcTree& tree)
   return out;
 }
 
-/// Reads a .ot file holding a ColorOcTree with OctoMap's own reader. Throws std::invalid_argument
-/// naming the file when it cannot be read or holds another tree type.
-inline std::unique_ptr<octomap::ColorOcTree> read_color_octree(const std::filesystem::path& path) {
-  if (!std::filesystem::is_regular_file(path)) {
-    throw std::invalid_argument("read_color_octree: " + path.string() + " is not a readable file");
+namespace detail {
+
+/// OctoMap's trees are 16 levels deep below the root (OcTreeBaseImpl's tree_depth).
+constexpr int kOctreeDepth = 16;
+/// Bytes of one ColorOcTreeNode in a .ot stream: log-odds float, r g b, child bitmask.
+constexpr std::size_t kColorNodeBytes = sizeof(float) + 3 + 1;
+
+/// Checks the node stream of a ColorOcTree .ot file (OcTreeBaseImpl::readNodesRecurs' layout:
+/// each node's data then a byte of child flags, children depth-first) before OctoMap reads it:
+/// OctoMap's reader neither notices the end of a truncated file (it builds nodes from whatever it
+/// reads, a wrong map or runaway allocation) nor bounds the depth. Throws std::invalid_argument
+/// naming `file` unless the stream holds exactly `expected_nodes` nodes, no node lies deeper than
+/// the tree, every log-odds value is finite and no byte follows the last node.
+inline void check_color_octree_stream(const std::string& bytes, std::size_t begin, std::size_t expected_nodes,
+                                      const std::string& file) {
+  const auto fail = [&file](const std::string& what) {
+    throw std::invalid_argument("read_color_octree: " + file + " is truncated or corrupt: " + what);
+  };
+  std::size_t pos = begin, nodes = 0;
+  std::vector<std::pair<int, int>> stack;  // (depth of the node to read, nodes left at that depth)
+  stack.emplace_back(0, 1);
+  while (!stack.empty()) {
+    if (stack.back().second == 0) {
+      stack.pop_back();
+      continue;
+    }
+    --stack.back().second;
+    const int depth = stack.back().first;
+    if (bytes.size() - pos < kColorNodeBytes) {
+      fail("the data ends after " + std::to_string(nodes) + " of " + std::to_string(expected_nodes) + " nodes");
+    }
+    float log_odds = 0;
+    std::memcpy(&log_odds, bytes.data() + pos, sizeof log_odds);
+    if (!std::isfinite(log_odds)) fail("node " + std::to_string(nodes) + " has a log-odds value that is not finite");
+    const unsigned char children = static_cast<unsigned char>(bytes[pos + kColorNodeBytes - 1]);
+    pos += kColorNodeBytes;
+    if (++nodes > expected_nodes) fail("it holds more nodes than the " + std::to_string(expected_nodes) + " of its header");
+    if (children != 0) {
+      if (depth >= kOctreeDepth) fail("node " + std::to_string(nodes - 1) + " has children below the deepest level");
+      int count = 0;
+      for (int bit = 0; bit < 8; ++bit) count += (children >> bit) & 1;
+      stack.emplace_back(depth + 1, count);
+    }
   }
-  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(path.string()));
-  if (!tree) throw std::invalid_argument("read_color_octree: " + path.string() + " is not an OctoMap .ot file");
+  if (nodes != expected_nodes) {
+    fail("it holds " + std::to_string(nodes) + " nodes, its header says " + std::to_string(expected_nodes));
+  }
+  if (pos != bytes.size()) fail(std::to_string(bytes.size() - pos) + " bytes follow the last node");
+}
+
+}  // namespace detail
+
+/// Reads a .ot file holding a ColorOcTree. The header and the node stream are checked first
+/// (detail::check_color_octree_stream), so that a truncated or corrupt file is refused instead of
+/// read as another map; then OctoMap's own reader builds the tree. Throws std::invalid_argument
+/// naming the file when it cannot be read, holds another tree type, or is truncated or corrupt.
+inline std::unique_ptr<octomap::ColorOcTree> read_color_octree(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw std::invalid_argument("read_color_octree: " + file + " is a directory, not a file");
+  }
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw std::invalid_argument("read_color_octree: " + file + " is not a readable file");
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in.is_open() || in.bad()) throw std::invalid_argument("read_color_octree: cannot read " + file);
+
+  // The text header (AbstractOcTree::readHeader): "# Octomap OcTree file", then "id", "size",
+  // "res" lines ('#' comments allowed) up to the line "data".
+  std::size_t pos = 0;
+  const auto next_line = [&bytes, &pos](std::string& line) {
+    if (pos >= bytes.size()) return false;
+    std::size_t end = bytes.find('\n', pos);
+    if (end == std::string::npos) end = bytes.size();
+    line = bytes.substr(pos, end - pos);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    pos = end + 1;
+    return true;
+  };
+  const std::string not_ot = "read_color_octree: " + file + " is not an OctoMap .ot file";
+  std::string line;
+  if (!next_line(line) || line.compare(0, 21, "# Octomap OcTree file") != 0) throw std::invalid_argument(not_ot);
+  std::string id;
+  long long size = -1;
+  bool data = false;
+  while (!data && next_line(line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::string token;
+    fields >> token;
+    if (token == "id") {
+      fields >> id;
+    } else if (token == "size") {
+      if (!(fields >> size) || size < 1) throw std::invalid_argument(not_ot + " (bad 'size' line)");
+    } else if (token == "data") {
+      data = true;
+    }
+  }
+  if (!data || id.empty() || size < 1) throw std::invalid_argument(not_ot + " (incomplete header)");
+  if (id != "ColorOcTree") {
+    throw std::invalid_argument("read_color_octree: " + file + " holds a " + id + ", not a ColorOcTree");
+  }
+  if (pos > bytes.size()) pos = bytes.size();
+  detail::check_color_octree_stream(bytes, pos, static_cast<std::size_t>(size), file);
+
+  std::istringstream stream(bytes);
+  std::unique_ptr<octomap::AbstractOcTree> tree;
+  {
+    // OctoMap reports progress ("Reading octree type ...") on std::cerr; the stream was checked
+    // above, so nothing it could say is news: keep it off the caller's standard error.
+    std::ostringstream octomap_chatter;
+    std::streambuf* const cerr_buffer = std::cerr.rdbuf(octomap_chatter.rdbuf());
+    try {
+      tree.reset(octomap::AbstractOcTree::read(stream));
+    } catch (...) {
+      std::cerr.rdbuf(cerr_buffer);
+      throw;
+    }
+    std::cerr.rdbuf(cerr_buffer);
+  }
+  if (!tree) throw std::invalid_argument(not_ot);
   auto* colour = dynamic_cast<octomap::ColorOcTree*>(tree.get());
   if (!colour) {
-    throw std::invalid_argument("read_color_octree: " + path.string() + " holds a " + tree->getTreeType() +
+    throw std::invalid_argument("read_color_octree: " + file + " holds a " + tree->getTreeType() +
                                 ", not a ColorOcTree");
   }
   tree.release();
