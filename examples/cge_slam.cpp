@@ -94,6 +94,7 @@ struct Options {
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   int keyframe_interval = cge::PatchKeyframeSettings<double>{}.interval_frames;  // mode YMK: k
   int orb_spread = cge::slam::OrbSettings{}.spread_oversampling;
+  int keyframe_min_gap = cge::OrbSlam2KeyframeSettings<double>{}.min_frame_gap;
   std::string loop_correction = "pgo+ba";                                        // none | pgo | pgo+ba
   // Depth term of the tracking refinement (0: pixels only) and local BA (on | off).
   double tracking_depth_sigma = cge::slam::TrackerSettings{}.refinement_depth_sigma_per_m;
@@ -338,8 +339,11 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
   j["lost_frames"] = static_cast<int>(frames.size()) - tracked;
   j["odometry_frames"] = odometry;
   j["relocalised_frames"] = relocalised;
-  j["keyframes"] = system.map().keyframe_count();
-  j["map_points"] = system.map().map_point_count();
+  // Kept: after map maintenance culled keyframes and erased points (ORB-SLAM2's counts).
+  j["keyframes"] = system.map().active_keyframe_count();
+  j["keyframes_inserted"] = system.map().keyframe_count();
+  j["map_points"] = system.map().active_map_point_count();
+  j["map_points_created"] = system.map().map_point_count();
   int accepted = 0;
   for (const auto& l : system.loops()) accepted += l.accepted;
   j["loops"] = {
@@ -412,6 +416,7 @@ int run(Options opt) {
   settings.mapping.reference_min_observations = opt.reference_min_observations;
   settings.patch_keyframes.interval_frames = opt.keyframe_interval;
   settings.frame.orb.spread_oversampling = opt.orb_spread;
+  settings.orbslam2_keyframes.min_frame_gap = opt.keyframe_min_gap;
   settings.keep_keyframe_images = opt.map;
   settings.loop_correction.enabled = opt.loop_correction != "none";
   settings.local_mapping.bundle_adjustment = opt.local_ba == "on";
@@ -592,11 +597,11 @@ int run(Options opt) {
   out.commit();
 
   std::printf("%s: %d frames, %d tracked, %d lost, %d keyframes; wrote %s in %.1f s\n", kProgram, n,
-              summary["tracked_frames"].get<int>(), summary["lost_frames"].get<int>(), system.map().keyframe_count(),
+              summary["tracked_frames"].get<int>(), summary["lost_frames"].get<int>(), system.map().active_keyframe_count(),
               opt.out.c_str(), elapsed_s());
   // The evaluation as `name value` lines (the figures of summary.json a reader looks for first).
   const auto print_line = [](const char* name, double value) { std::printf("%s %.6g\n", name, value); };
-  print_line("keyframes", system.map().keyframe_count());
+  print_line("keyframes", system.map().active_keyframe_count());
   print_line("loops_accepted", summary["loops"]["accepted"].get<double>());
   print_line("loop_corrections", system.loop_corrections());
   if (!summary["dynamic_leak"]["rate"].is_null()) {
@@ -692,6 +697,10 @@ int main(int argc, char** argv) {
                  "ORB-SLAM2 keyframe baseline: count the reference keyframe's map points seen by >= this many "
                  "keyframes (ORB-SLAM2's nMinObs)")
       ->capture_default_str();
+  app.add_option("--keyframe-min-gap", opt.keyframe_min_gap,
+                 "modes none, Y, YM: frames after a keyframe before the ORB-SLAM2 policy's ratio rule may insert "
+                 "the next (stands in for the time ORB-SLAM2's local-mapping thread is busy)")
+      ->check(CLI::Range(0, 1000));
   app.add_option("--orb-spread", opt.orb_spread,
                  "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")
       ->check(CLI::Range(1, 8));

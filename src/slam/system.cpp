@@ -48,17 +48,6 @@ double elapsed_ms(Clock::time_point since) {
 
 double& time_of(FrameRecord& r, Stage s) { return r.times_ms[static_cast<std::size_t>(s)]; }
 
-/// A map point's observations, each with depth counting depth_weight times (ORB-SLAM2 counts a
-/// stereo/RGB-D observation twice).
-int weighted_observations(const Map& map, const MapPoint& p, int depth_weight) {
-  int n = 0;
-  for (const Observation& o : p.observations) {
-    const Keyframe& kf = map.keyframe(o.keyframe_id);
-    n += std::isfinite(kf.points_camera_m[static_cast<std::size_t>(o.keypoint_index)].z()) ? depth_weight : 1;
-  }
-  return n;
-}
-
 }  // namespace
 
 System::System(const SystemSettings& settings, const PinholeIntrinsics<double>& intrinsics,
@@ -216,7 +205,7 @@ void System::decide_keyframe(Frame& frame, TrackResult& track, std::size_t recor
                                                    : m.reference_min_observations;
     int well_observed = 0;
     for (const std::int64_t p : map_.keyframe(reference).map_point_ids) {
-      well_observed += p >= 0 && weighted_observations(map_, map_.map_point(p), m.depth_observation_weight) >= min_obs;
+      well_observed += p >= 0 && weighted_observations(map_, map_.map_point(p)) >= min_obs;
     }
     keyframe_policy_.set_reference_tracked_points(well_observed);
   }
@@ -325,11 +314,6 @@ void System::local_mapping(int keyframe_id) {
   maintenance.close_depth_m = settings_.frame.close_depth_m;
   const double scale = settings_.frame.orb.scale_factor;
   if (lm.cull_map_points) cull_recent_map_points(map_, recent_points_, keyframe_id, maintenance);
-  if (lm.triangulate_points) {
-    const TriangulationReport made =
-        triangulate_new_points(map_, keyframe_id, intrinsics_, image_size_, scale, maintenance);
-    recent_points_.insert(recent_points_.end(), made.created.begin(), made.created.end());
-  }
   if (lm.fuse_map_points) fuse_map_points(map_, keyframe_id, intrinsics_, image_size_, scale, maintenance);
   if (lm.bundle_adjustment) local_bundle_adjustment(map_, keyframe_id, intrinsics_, lm, scale);
   if (lm.cull_keyframes) {

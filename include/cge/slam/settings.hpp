@@ -156,9 +156,8 @@ struct MappingSettings {
   /// points observed at least this many times, >= 1 (2 at most while the map has at most 2
   /// keyframes; ORB-SLAM2 Tracking::NeedNewKeyFrame: nMinObs = 3).
   int reference_min_observations = 3;
-  /// How many times an observation with depth counts there, >= 1 (ORB-SLAM2 counts a stereo or
-  /// RGB-D observation twice, MapPoint::AddObservation; so nMinObs 3 means two keyframes with depth).
-  int depth_observation_weight = 2;
+  /// Observations with depth count twice there, as ORB-SLAM2 counts stereo/RGB-D ones
+  /// (weighted_observations, cge/slam/map_maintenance.hpp): nMinObs 3 means two keyframes with depth.
 };
 
 /// Local bundle adjustment after each keyframe insertion (ORB-SLAM2's local mapping): the new
@@ -171,7 +170,6 @@ struct LocalMappingSettings {
   // Map maintenance after each keyframe, in ORB-SLAM2's order (LocalMapping::Run): recent points
   // culled, new points triangulated, duplicates fused, local BA, redundant keyframes culled.
   bool cull_map_points = true;      ///< cull_recent_map_points (cge/slam/map_maintenance.hpp)
-  bool triangulate_points = true;   ///< triangulate_new_points for keypoints without usable depth
   bool fuse_map_points = true;      ///< fuse_map_points among covisible keyframes
   bool cull_keyframes = true;       ///< cull_redundant_keyframes (its close_depth_m follows FrameSettings)
   MapMaintenanceSettings maintenance;
@@ -266,7 +264,6 @@ struct SystemSettings {
     if (!(mapping.max_new_point_depth_m > 0)) fail("mapping.max_new_point_depth_m must be > 0");
     if (mapping.reference_min_observations < 1) fail("mapping.reference_min_observations must be at least 1");
     if (mapping.min_new_points < 0) fail("mapping.min_new_points must not be negative");
-    if (mapping.depth_observation_weight < 1) fail("mapping.depth_observation_weight must be at least 1");
     if (!(frame.close_depth_m > 0)) fail("frame.close_depth_m must be > 0");
     if (local_mapping.covisible_keyframes < 0) fail("local_mapping.covisible_keyframes must not be negative");
     if (local_mapping.fixed_keyframes < 0) fail("local_mapping.fixed_keyframes must not be negative");
