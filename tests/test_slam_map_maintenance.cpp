@@ -619,6 +619,94 @@ TEST_CASE("cull_redundant_keyframes culls keyframes whose close points three oth
   CHECK(again.examined == std::vector<int>{1, 2, 5});
 }
 
+// ---- triangulation -------------------------------------------------------------------------------
+
+TEST_CASE("triangulate_new_points makes points for matched keypoints without depth", "[maintenance][slam]") {
+  std::mt19937 rng(11);
+  // Keyframe 1 is the new one; keyframe 0 is its neighbour, where the epipolar band is measured.
+  const Eigen::Isometry3d pose0 = Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d pose1 = some_pose(0.05, Eigen::Vector3d(0.3, 0.02, 0.05));
+  // Shared points with depth make the keyframes covisible (and give keyframe 0 its median depth).
+  std::vector<Eigen::Vector3d> anchors;
+  for (int j = 0; j < 5; ++j) anchors.emplace_back(-0.8 + 0.4 * j, -0.7, 3.0);
+  // Points seen without depth, keyframe 1's descriptor 3 bits off keyframe 0's unless said:
+  //   0..4 triangulated; 5 is 50 bits off (TH_LOW, still matched) and triangulated; 6 is 51 bits off:
+  //   no match; 7 is 2000 m away: matched, but the rays are nearly parallel (cosine >= 0.9998);
+  //   8 has keyframe 0's keypoint 2.1 px off the epipolar line (chi2 ~4.4 >= 3.84): no match;
+  //   9 is 1.8 px off (chi2 ~3.2): matched and triangulated, a few millimetres off.
+  std::vector<Eigen::Vector3d> targets;
+  for (int j = 0; j < 6; ++j) targets.emplace_back(-0.9 + 0.35 * j, 0.1 * (j % 3), 2.5 + 0.3 * j);
+  targets.emplace_back(0.2, 0.5, 2.8);
+  targets.emplace_back(120.0, 0.1 * 2000 / 3, 2000.0);
+  targets.emplace_back(-0.4, 0.6, 3.2);
+  targets.emplace_back(0.5, 0.35, 2.7);
+  std::vector<cv::Mat> desc;
+  for (std::size_t j = 0; j < targets.size(); ++j) desc.push_back(random_descriptor(rng));
+  std::vector<Kp> kps0, kps1;
+  for (const Eigen::Vector3d& a : anchors) {
+    const Eigen::Vector2d u0 = pixel_of(pose0, a), u1 = pixel_of(pose1, a);
+    kps0.push_back(kp_of(u0.x(), u0.y(), 0, (pose0.inverse() * a).z()));
+    kps1.push_back(kp_of(u1.x(), u1.y(), 0, (pose1.inverse() * a).z()));
+  }
+  for (std::size_t j = 0; j < targets.size(); ++j) {
+    const Eigen::Vector2d u0 = pixel_of(pose0, targets[j]), u1 = pixel_of(pose1, targets[j]);
+    REQUIRE((u0.x() > 0 && u0.x() < 640 && u0.y() > 0 && u0.y() < 480));
+    REQUIRE((u1.x() > 0 && u1.x() < 640 && u1.y() > 0 && u1.y() < 480));
+    const int octave = j >= 8 ? 0 : static_cast<int>(j % 2);
+    const double off = j == 8 ? 2.1 : j == 9 ? 1.8 : 0.0;  // across the nearly horizontal epipolar lines
+    const int bits = j == 5 ? 50 : j == 6 ? 51 : 3;
+    kps0.push_back(Kp{u0.x(), u0.y() + off, octave, kNaN, cge::FeatureLabel::static_feature, desc[j]});
+    kps1.push_back(Kp{u1.x(), u1.y(), octave, kNaN, cge::FeatureLabel::static_feature, flipped(desc[j], bits)});
+  }
+  // A keypoint with depth in keyframe 0 is never used (it had its chance to make a point at insertion).
+  const Eigen::Vector3d with_depth(0.7, -0.3, 2.6);
+  const cv::Mat d_depth = random_descriptor(rng);
+  kps0.push_back(Kp{pixel_of(pose0, with_depth).x(), pixel_of(pose0, with_depth).y(), 0, 2.6,
+                    cge::FeatureLabel::static_feature, d_depth});
+  kps1.push_back(Kp{pixel_of(pose1, with_depth).x(), pixel_of(pose1, with_depth).y(), 0, kNaN,
+                    cge::FeatureLabel::static_feature, d_depth});
+  Map map;
+  map.add_keyframe(make_keyframe(pose0, kps0));
+  map.add_keyframe(make_keyframe(pose1, kps1));
+  for (std::size_t j = 0; j < anchors.size(); ++j) {
+    const std::int64_t id = map.add_map_point(anchors[j], zero_descriptor(), 0);
+    map.add_observation(id, 0, static_cast<int>(j));
+    map.add_observation(id, 1, static_cast<int>(j));
+  }
+  const std::int64_t before = map.map_point_count();
+
+  MapMaintenanceSettings settings;
+  CHECK_THROWS_AS(cge::slam::triangulate_new_points(map, 2, kIntrinsics, 1.2, settings), std::invalid_argument);
+  CHECK_THROWS_AS(cge::slam::triangulate_new_points(map, 1, kIntrinsics, 0.9, settings), std::invalid_argument);
+  const cge::slam::TriangulationReport r = cge::slam::triangulate_new_points(map, 1, kIntrinsics, 1.2, settings);
+  check_map_consistent(map);
+  CHECK(r.neighbours == std::vector<int>{0});
+  CHECK(r.matches == 8);  // 0..5, 7 and 9
+  const std::vector<std::size_t> made{0, 1, 2, 3, 4, 5, 9};
+  REQUIRE(r.created.size() == made.size());
+  const std::size_t first = anchors.size();
+  for (std::size_t m = 0; m < made.size(); ++m) {
+    const std::size_t j = made[m];
+    CAPTURE(j);
+    const cge::slam::MapPoint& p = map.map_point(r.created[m]);
+    CHECK(p.id == before + static_cast<std::int64_t>(m));
+    CHECK(p.created_by_keyframe == 1);
+    // Exact pixels (stored as float) give the point to micrometres; 1.8 px of disagreement to millimetres.
+    CHECK((p.position_world - targets[j]).norm() < (j == 9 ? 0.02 : 1e-4));
+    CHECK(map.keyframe(0).map_point_ids[first + j] == p.id);
+    CHECK(map.keyframe(1).map_point_ids[first + j] == p.id);
+    CHECK(cv::norm(p.descriptor, map.keyframe(1).descriptors.row(static_cast<int>(first + j)), cv::NORM_HAMMING) == 0);
+  }
+  for (const std::size_t j : {6u, 7u, 8u, 10u}) {
+    CAPTURE(j);
+    CHECK(map.keyframe(0).map_point_ids[first + j] == -1);
+    CHECK(map.keyframe(1).map_point_ids[first + j] == -1);
+  }
+  CHECK(map.shared_points(0, 1) == 5 + 7);
+  // Matched keypoints observe their points now: a second run makes nothing.
+  CHECK(cge::slam::triangulate_new_points(map, 1, kIntrinsics, 1.2, settings).created.empty());
+}
+
 TEST_CASE("MapMaintenanceSettings::validate names the field", "[maintenance][slam]") {
   MapMaintenanceSettings s;
   CHECK_NOTHROW(s.validate());
