@@ -110,7 +110,8 @@ void check_map_consistent(const Map& map) {
     for (const auto& a : p.observations) {
       CHECK(map.keyframe(a.keyframe_id).map_point_ids[static_cast<std::size_t>(a.keypoint_index)] == p.id);
       for (const auto& b : p.observations) {
-        if (a.keyframe_id != b.keyframe_id) ++shared[static_cast<std::size_t>(a.keyframe_id)][static_cast<std::size_t>(b.keyframe_id)];
+        if (a.keyframe_id != b.keyframe_id)
+          ++shared[static_cast<std::size_t>(a.keyframe_id)][static_cast<std::size_t>(b.keyframe_id)];
       }
     }
   }
@@ -175,8 +176,9 @@ TEST_CASE("Map keeps undistorted pixels, creation keyframes and found/visible co
   CHECK(map.map_point(a).visible == 1);
   CHECK(map.map_point(a).found == 1);
   CHECK_FALSE(map.map_point(a).bad);
-  CHECK(cge_test::invalid_argument_message([&] { map.add_map_point(Eigen::Vector3d(0, 0, 2), zero_descriptor(), 1); })
-            .find("keyframe 1") != std::string::npos);
+  CHECK(cge_test::invalid_argument_message([&] {
+          map.add_map_point(Eigen::Vector3d(0, 0, 2), zero_descriptor(), 1);
+        }).find("keyframe 1") != std::string::npos);
   map.increase_visible(a, 3);
   map.increase_found(a);
   CHECK(map.map_point(a).visible == 4);
@@ -374,8 +376,7 @@ TEST_CASE("Map covisibility stays exact through random erase, replace and cull s
 
 // ---- map-point culling ------------------------------------------------------------------------------
 
-TEST_CASE("cull_recent_map_points: found ratio, young points with few observations, maturity",
-          "[maintenance][slam]") {
+TEST_CASE("cull_recent_map_points: found ratio, young points with few observations, maturity", "[maintenance][slam]") {
   Map map;
   // Keypoints 0..3 with depth (weight 2), 4..7 without (weight 1).
   for (int k = 0; k < 5; ++k) {
@@ -393,17 +394,17 @@ TEST_CASE("cull_recent_map_points: found ratio, young points with few observatio
   map.increase_visible(at_ratio, 3);
   const std::int64_t low_ratio = point(3, {{3, 1}, {4, 1}});  // 1/5 < 0.25: erased
   map.increase_visible(low_ratio, 4);
-  const std::int64_t young_three = point(2, {{2, 0}, {3, 4}});  // age 2, weight 2 + 1 = 3 <= 3: erased
-  const std::int64_t young_four = point(2, {{2, 1}, {3, 2}});   // age 2, weight 4 > 3: kept, stays recent
-  const std::int64_t age_one_light = point(3, {{3, 5}});        // age 1, weight 1: too young to judge
-  const std::int64_t mature = point(1, {{1, 0}, {2, 2}});       // age 3, weight 4: leaves the list, kept
-  const std::int64_t mature_light = point(1, {{1, 4}, {4, 5}}); // age 3, weight 2 <= 3: erased (checked first)
+  const std::int64_t young_three = point(2, {{2, 0}, {3, 4}});   // age 2, weight 2 + 1 = 3 <= 3: erased
+  const std::int64_t young_four = point(2, {{2, 1}, {3, 2}});    // age 2, weight 4 > 3: kept, stays recent
+  const std::int64_t age_one_light = point(3, {{3, 5}});         // age 1, weight 1: too young to judge
+  const std::int64_t mature = point(1, {{1, 0}, {2, 2}});        // age 3, weight 4: leaves the list, kept
+  const std::int64_t mature_light = point(1, {{1, 4}, {4, 5}});  // age 3, weight 2 <= 3: erased (checked first)
   const std::int64_t already_bad = point(3, {{3, 3}});
   map.erase_map_point(already_bad);
   check_map_consistent(map);
 
-  std::vector<std::int64_t> recent{at_ratio, low_ratio, young_three, young_four, age_one_light, mature, mature_light,
-                                   already_bad};
+  std::vector<std::int64_t> recent{at_ratio,      low_ratio, young_three,  young_four,
+                                   age_one_light, mature,    mature_light, already_bad};
   const std::vector<std::int64_t> before = recent;
   MapMaintenanceSettings settings;
   // Errors leave the list and the map untouched.
@@ -443,14 +444,14 @@ TEST_CASE("fuse_map_points merges duplicates and adds observations within the ch
   std::vector<Eigen::Isometry3d> pose;
   for (int k = 0; k < 5; ++k) pose.push_back(at_x(0.1 * k));
   // Physical points, far apart in the images.
-  const Eigen::Vector3d S(-0.8, -0.5, 3.5), A(-0.3, -0.4, 3.0), H(0.4, -0.4, 3.0), B(-0.6, 0.2, 2.5),
-      C(-0.2, 0.2, 2.5), D(0.2, 0.2, 2.5), E(0.6, 0.2, 2.5), F(-0.6, 0.6, 2.5), G(-0.1, 0.6, 2.5), Q(0.9, 0.6, 3.0);
+  const Eigen::Vector3d S(-0.8, -0.5, 3.5), A(-0.3, -0.4, 3.0), H(0.4, -0.4, 3.0), B(-0.6, 0.2, 2.5), C(-0.2, 0.2, 2.5),
+      D(0.2, 0.2, 2.5), E(0.6, 0.2, 2.5), F(-0.6, 0.6, 2.5), G(-0.1, 0.6, 2.5), Q(0.9, 0.6, 3.0);
   const Eigen::Vector3d mm(0.001, 0, 0);  // the duplicates made by keyframe 2 sit 1 mm off
   std::map<char, cv::Mat> desc;
   for (const char c : std::string("SAHBCDEFGQ")) desc[c] = random_descriptor(rng);
 
-  const auto kp_at = [&](int k, const Eigen::Vector3d& p, const cv::Mat& d, double depth, int octave = 0,
-                         double du = 0, cge::FeatureLabel label = cge::FeatureLabel::static_feature) {
+  const auto kp_at = [&](int k, const Eigen::Vector3d& p, const cv::Mat& d, double depth, int octave = 0, double du = 0,
+                         cge::FeatureLabel label = cge::FeatureLabel::static_feature) {
     const Eigen::Vector2d uv = pixel_of(pose[static_cast<std::size_t>(k)], p);
     return Kp{uv.x() + du, uv.y(), octave, depth, label, d};
   };
@@ -459,11 +460,11 @@ TEST_CASE("fuse_map_points merges duplicates and adds observations within the ch
   // kf3: Q only (a second neighbour of kf2, through kf1).   kf4: a keypoint where B projects, never a
   // target (it shares no point with anyone).
   map.add_keyframe(make_keyframe(pose[0], {kp_at(0, S, desc['S'], 3.5), kp_at(0, A, desc['A'], 3.0)}));
-  map.add_keyframe(make_keyframe(
-      pose[1], {kp_at(1, S, desc['S'], 3.5), kp_at(1, A, desc['A'], 3.0), kp_at(1, B, desc['B'], 2.5),
-                kp_at(1, C, desc['C'], 2.5), kp_at(1, D, desc['D'], 2.5), kp_at(1, E, desc['E'], 2.5),
-                kp_at(1, F, desc['F'], 2.5), kp_at(1, G, desc['G'], 2.5), kp_at(1, H, desc['H'], 3.0),
-                kp_at(1, Q, desc['Q'], 3.0)}));
+  map.add_keyframe(
+      make_keyframe(pose[1], {kp_at(1, S, desc['S'], 3.5), kp_at(1, A, desc['A'], 3.0), kp_at(1, B, desc['B'], 2.5),
+                              kp_at(1, C, desc['C'], 2.5), kp_at(1, D, desc['D'], 2.5), kp_at(1, E, desc['E'], 2.5),
+                              kp_at(1, F, desc['F'], 2.5), kp_at(1, G, desc['G'], 2.5), kp_at(1, H, desc['H'], 3.0),
+                              kp_at(1, Q, desc['Q'], 3.0)}));
   // kf2's keypoints, by index:
   //  0 S (observes S)     1 A' (observes its own duplicate of A, weight 2 vs A's 4: A stays)
   //  2 H' (own duplicate of H, weight 2 = H's 2: the projected H' stays, H is replaced)
@@ -473,12 +474,12 @@ TEST_CASE("fuse_map_points merges duplicates and adds observations within the ch
   //  6 E at the projection, 51 bits off: over TH_LOW, not fused
   //  7 F at the projection, 50 bits off: fused
   //  8 G at the projection, same descriptor, but dynamic: never a candidate
-  map.add_keyframe(make_keyframe(
-      pose[2], {kp_at(2, S, desc['S'], 3.5), kp_at(2, A + mm, flipped(desc['A'], 5), 3.0),
-                kp_at(2, H + mm, flipped(desc['H'], 5), 3.0), kp_at(2, B, flipped(desc['B'], 10), 2.5),
-                kp_at(2, C, desc['C'], 2.5, 0, 2.5), kp_at(2, D, desc['D'], 2.5, 1, 2.88),
-                kp_at(2, E, flipped(desc['E'], 51), 2.5), kp_at(2, F, flipped(desc['F'], 50), 2.5),
-                kp_at(2, G, desc['G'], 2.5, 0, 0, cge::FeatureLabel::dynamic_by_mask)}));
+  map.add_keyframe(
+      make_keyframe(pose[2], {kp_at(2, S, desc['S'], 3.5), kp_at(2, A + mm, flipped(desc['A'], 5), 3.0),
+                              kp_at(2, H + mm, flipped(desc['H'], 5), 3.0), kp_at(2, B, flipped(desc['B'], 10), 2.5),
+                              kp_at(2, C, desc['C'], 2.5, 0, 2.5), kp_at(2, D, desc['D'], 2.5, 1, 2.88),
+                              kp_at(2, E, flipped(desc['E'], 51), 2.5), kp_at(2, F, flipped(desc['F'], 50), 2.5),
+                              kp_at(2, G, desc['G'], 2.5, 0, 0, cge::FeatureLabel::dynamic_by_mask)}));
   map.add_keyframe(make_keyframe(pose[3], {kp_at(3, Q, desc['Q'], 3.0)}));
   map.add_keyframe(make_keyframe(pose[4], {kp_at(4, B, desc['B'], 2.5)}));
 

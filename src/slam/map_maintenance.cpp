@@ -261,7 +261,8 @@ KeyframeCullingReport cull_redundant_keyframes(Map& map, int keyframe_id, const 
       int observers = 0;
       for (const Observation& o : map.map_point(id).observations) {
         if (o.keyframe_id == k) continue;
-        const int other_octave = map.keyframe(o.keyframe_id).keypoints[static_cast<std::size_t>(o.keypoint_index)].octave;
+        const int other_octave =
+            map.keyframe(o.keyframe_id).keypoints[static_cast<std::size_t>(o.keypoint_index)].octave;
         if (other_octave <= octave + s.redundant_octave_tolerance) ++observers;
         if (observers >= s.redundant_min_observers) break;
       }

@@ -128,7 +128,7 @@ class Map final : public KeyframeDatabaseView {
 
   std::vector<Keyframe> keyframes_;
   std::vector<MapPoint> points_;
-  std::vector<std::map<int, int>> covisibility_;  // per keyframe: other keyframe id -> shared points (> 0)
+  std::vector<std::map<int, int>> covisibility_;   // per keyframe: other keyframe id -> shared points (> 0)
   std::vector<std::vector<int>> culled_children_;  // per keyframe: culled keyframes whose parent it is
   int culled_keyframes_ = 0;
   std::int64_t bad_points_ = 0;

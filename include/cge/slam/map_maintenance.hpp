@@ -52,15 +52,16 @@ struct MapMaintenanceSettings {
   /// Only points whose keypoint depth is in (0, close_depth_m] count, metres. ORB-SLAM2: ThDepth = 40
   /// baselines of bf = 40 px m, i.e. 40 * 40 / fx = 2.99 m for TUM fr3 (fx 535.4), 3.09 m for fr1.
   double close_depth_m = 3.0;
-  int redundant_min_observers = 3;  ///< other keyframes that must see a point for it to be redundant (ORB-SLAM2 thObs: 3)
+  /// Other keyframes that must see a point for it to be redundant, count (ORB-SLAM2 thObs: 3).
+  int redundant_min_observers = 3;
   /// Those observers must see it at octave <= the keyframe's octave + this (ORB-SLAM2: 1).
   int redundant_octave_tolerance = 1;
   /// Culled when more than this fraction of its counted points are redundant (ORB-SLAM2: 0.9).
   double redundant_fraction = 0.9;
 
   // ---- triangulation (LocalMapping.cc CreateNewMapPoints, ORBmatcher.cc SearchForTriangulation) ----
-  int triangulation_neighbours = 10;     ///< most covisible keyframes paired with the new one (ORB-SLAM2 nn: 10)
-  int triangulation_max_hamming = 50;    ///< bits (ORBmatcher TH_LOW: 50)
+  int triangulation_neighbours = 10;   ///< most covisible keyframes paired with the new one (ORB-SLAM2 nn: 10)
+  int triangulation_max_hamming = 50;  ///< bits (ORBmatcher TH_LOW: 50)
   /// Best distance < ratio * second best among the candidates on the epipolar line (ORB-SLAM2 builds
   /// this matcher with nnratio 0.6; its search restricts candidates by vocabulary node instead).
   double triangulation_ratio = 0.6;
@@ -88,12 +89,12 @@ int weighted_observations(const Map& map, const MapPoint& point);
 
 /// What cull_recent_map_points did.
 struct MapPointCullingReport {
-  int checked = 0;                  ///< entries of the recent list examined
-  int dropped_bad = 0;              ///< already bad: left the list
-  int erased_low_found_ratio = 0;   ///< found / visible < min_found_ratio
-  int erased_few_observations = 0;  ///< old enough, too few weighted observations
-  int matured = 0;                  ///< old enough and kept: left the list
-  std::vector<std::int64_t> erased; ///< in list order
+  int checked = 0;                   ///< entries of the recent list examined
+  int dropped_bad = 0;               ///< already bad: left the list
+  int erased_low_found_ratio = 0;    ///< found / visible < min_found_ratio
+  int erased_few_observations = 0;   ///< old enough, too few weighted observations
+  int matured = 0;                   ///< old enough and kept: left the list
+  std::vector<std::int64_t> erased;  ///< in list order
 };
 
 /// ORB-SLAM2's MapPointCulling over `recent` (ids of recently created points, in the caller's order),
@@ -108,10 +109,10 @@ MapPointCullingReport cull_recent_map_points(Map& map, std::vector<std::int64_t>
 
 /// What fuse_map_points did.
 struct FusionReport {
-  std::vector<int> targets;     ///< the neighbour keyframes, ascending id
-  int projections = 0;          ///< points projected inside a keyframe's image (both directions)
-  int observations_added = 0;   ///< a point gained a keypoint that saw no point
-  int points_replaced = 0;      ///< duplicates merged by replace_map_point
+  std::vector<int> targets;    ///< the neighbour keyframes, ascending id
+  int projections = 0;         ///< points projected inside a keyframe's image (both directions)
+  int observations_added = 0;  ///< a point gained a keypoint that saw no point
+  int points_replaced = 0;     ///< duplicates merged by replace_map_point
 };
 
 /// ORB-SLAM2's SearchInNeighbors, serial. Targets: the keyframe's fuse_covisible_keyframes most
@@ -146,9 +147,9 @@ KeyframeCullingReport cull_redundant_keyframes(Map& map, int keyframe_id, const 
 
 /// What triangulate_new_points did.
 struct TriangulationReport {
-  std::vector<int> neighbours;          ///< keyframes paired with the new one, ascending id
-  int matches = 0;                      ///< descriptor matches passing the epipolar and ratio tests
-  std::vector<std::int64_t> created;    ///< new map points, in creation order (add them to the recent list)
+  std::vector<int> neighbours;        ///< keyframes paired with the new one, ascending id
+  int matches = 0;                    ///< descriptor matches passing the epipolar and ratio tests
+  std::vector<std::int64_t> created;  ///< new map points, in creation order (add them to the recent list)
 };
 
 /// ORB-SLAM2's CreateNewMapPoints for keypoints without depth: between the keyframe and each of its
