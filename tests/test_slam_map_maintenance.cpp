@@ -165,12 +165,17 @@ TEST_CASE("Map keeps undistorted pixels, creation keyframes and found/visible co
   Keyframe wrong = plain_keyframe(3);
   wrong.undistorted_px.pop_back();
   CHECK_THROWS_AS(map.add_keyframe(wrong), std::invalid_argument);
+  Keyframe narrow = plain_keyframe(3);
+  narrow.descriptors = cv::Mat::zeros(3, 16, CV_8UC1);  // the matching reads 32 bytes per row
+  CHECK(cge_test::invalid_argument_message([&] { map.add_keyframe(narrow); }).find("32-byte") != std::string::npos);
   Keyframe culled = plain_keyframe(3);
   culled.culled = true;
   CHECK_THROWS_AS(map.add_keyframe(culled), std::invalid_argument);
 
   const std::int64_t a = map.add_map_point(Eigen::Vector3d(0, 0, 2), zero_descriptor());
   const std::int64_t b = map.add_map_point(Eigen::Vector3d(0, 0, 2), zero_descriptor(), 0);
+  CHECK_THROWS_AS(map.add_map_point(Eigen::Vector3d(0, 0, 2), cv::Mat::zeros(1, 16, CV_8UC1)), std::invalid_argument);
+  CHECK_THROWS_AS(map.add_map_point(Eigen::Vector3d(0, 0, 2), cv::Mat::zeros(1, 32, CV_32F)), std::invalid_argument);
   CHECK(map.map_point(a).created_by_keyframe == -1);
   CHECK(map.map_point(b).created_by_keyframe == 0);
   CHECK(map.map_point(a).visible == 1);
