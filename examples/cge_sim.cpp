@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <cstdint>
 #include <cstdio>
 #include <deque>
@@ -149,6 +151,13 @@ void write_overlapped(const cge::sim::FrameSource& source, const cge::sim::Segme
 
 int run(Options opt) {
   if (opt.frames < 1) throw UsageError("--frames must be at least 1, got " + std::to_string(opt.frames));
+  cge_tool::require_at_most("--frames", opt.frames, cge::sim::kMaxPresetFrames, "10 minutes at 30 Hz");
+  cge_tool::require_at_most("--walking-speed", opt.preset_settings.walking_speed_mps, cge::sim::kMaxWalkingSpeedMps,
+                            "metres per second, a sprinter's");
+  if (!opt.exact_masks) {
+    cge_tool::require_at_most("--mask-offset-px", std::abs(opt.errors.boundary_offset_px),
+                              cge::sim::kMaxBoundaryOffsetPx, "pixels either way");
+  }
   if (opt.out.empty()) throw UsageError("--out must name a folder");
   if (opt.exact_masks) {
     opt.errors = cge::sim::exact_segmentation();
@@ -196,7 +205,9 @@ int main(int argc, char** argv) {
                kProgram};
   app.set_version_flag("--version", std::string(kProgram) + " " + CGE_VERSION_STRING);
   app.add_option("--preset", opt.preset, "scenario, e.g. walking_xyz (--list-presets shows them)")->required();
-  app.add_option("--frames", opt.frames, "number of frames, >= 1")->required();
+  app.add_option("--frames", opt.frames,
+                 "number of frames, 1 .. " + std::to_string(cge::sim::kMaxPresetFrames))
+      ->required();
   app.add_option("--seed", opt.seed, "seed of the scene and of the segmentation errors")->capture_default_str();
   app.add_option("--out", opt.out, "output folder; must not exist or be empty, unless --force")->required();
   app.add_flag("--force", opt.writer.force,
@@ -209,7 +220,8 @@ int main(int argc, char** argv) {
   app.add_flag("--no-depth-noise", opt.no_depth_noise,
                "depth without the sensor's range noise (still quantised, with its holes and dropouts)");
   app.add_option("--walking-speed", opt.preset_settings.walking_speed_mps,
-                 "walking presets: speed of the walking people, metres per second")
+                 "walking presets: speed of the walking people, metres per second, at most " +
+                     cge_tool::round_trip_number(cge::sim::kMaxWalkingSpeedMps))
       ->check(cge_tool::above_zero())
       ->capture_default_str();
   app.add_option("--pause-s", opt.preset_settings.pause_s,
@@ -217,7 +229,8 @@ int main(int argc, char** argv) {
       ->check(cge_tool::at_least_zero())
       ->capture_default_str();
   app.add_option("--mask-offset-px", opt.errors.boundary_offset_px,
-                 "boundary shift of affected masks, pixels: > 0 dilates, < 0 erodes")
+                 "boundary shift of affected masks, pixels: > 0 dilates, < 0 erodes; at most " +
+                     std::to_string(cge::sim::kMaxBoundaryOffsetPx) + " either way")
       ->capture_default_str();
   app.add_option("--feet-probability", opt.errors.feet_loss_probability,
                  "probability per instance and frame that the feet are lost")

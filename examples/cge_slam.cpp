@@ -81,12 +81,21 @@ cge_tool::ProgressBar progress_bar{kProgram};  // drawn only on a terminal
 
 using cge_tool::UsageError;
 
+/// The --temporal-filter default: "N/M" of the segmentation source's defaults.
+std::string default_temporal_filter() {
+  const cge::TemporalInstanceFilterSettings d;
+  return std::to_string(d.min_frames_seen) + "/" + std::to_string(d.window_frames);
+}
+
 struct Options {
   std::string dataset;
   std::string mode = "YMK";
   std::string segmentation;  // default: ground_truth (rendered or synthetic folder)
   std::string model;
   std::string masks;
+  // Temporal instance filter of the network sources: "N/M" (seen in N of the last M frames) or "off".
+  std::string temporal_filter = default_temporal_filter();
+  std::string temporal_overlap = cge::to_string(cge::TemporalInstanceFilterSettings{}.overlap);
   std::string settings;
   std::string vocabulary;
   std::uint64_t seed = 0;
@@ -113,6 +122,36 @@ struct Options {
   std::string out;
   bool force = false;
 };
+
+/// --temporal-filter and --temporal-overlap into the segmentation source's settings.
+void apply_temporal_filter(const std::string& text, const std::string& overlap,
+                           cge::dataset::SegmentationSourceSettings& seg) {
+  seg.temporal_filter.overlap = overlap == "mask" ? cge::TemporalOverlap::mask : cge::TemporalOverlap::box;
+  if (text == "off") {
+    seg.temporal_filter_sources.clear();
+    return;
+  }
+  const std::size_t slash = text.find('/');
+  int n = 0, m = 0;
+  std::size_t used_n = 0, used_m = 0;
+  try {
+    if (slash == std::string::npos) throw std::invalid_argument("no slash");
+    n = std::stoi(text.substr(0, slash), &used_n);
+    m = std::stoi(text.substr(slash + 1), &used_m);
+  } catch (const std::exception&) {
+    throw UsageError("--temporal-filter: '" + text + "' is not N/M (e.g. 2/3) or off");
+  }
+  if (used_n != slash || used_m != text.size() - slash - 1) {
+    throw UsageError("--temporal-filter: '" + text + "' is not N/M (e.g. 2/3) or off");
+  }
+  seg.temporal_filter.min_frames_seen = n;
+  seg.temporal_filter.window_frames = m;
+  try {
+    seg.temporal_filter.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--temporal-filter: ") + e.what());
+  }
+}
 
 /// A number as "%g" prints it (help texts).
 std::string short_number(double value) {
@@ -350,6 +389,8 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
       {"candidates", system.loops().size()}, {"accepted", accepted}, {"corrections", system.loop_corrections()}};
   j["mode"] = cge::slam::to_string(system.settings().mode);
   j["segmentation"] = opt.segmentation;
+  j["temporal_filter"] = opt.segmentation == "yolo" ? opt.temporal_filter : "off";
+  if (opt.segmentation == "yolo" && opt.temporal_filter != "off") j["temporal_overlap"] = opt.temporal_overlap;
   j["source"] = source;
   j["seed"] = opt.seed;
   j["loop_settings"] = loop_settings;
@@ -496,6 +537,7 @@ int run(Options opt) {
       cge::dataset::SegmentationSourceSettings seg;
       seg.source = cge::dataset::SegmentationSource::yolo;
       seg.yolo_model_path = opt.model;
+      apply_temporal_filter(opt.temporal_filter, opt.temporal_overlap, seg);
       segmenter = cge::dataset::make_segmenter(seg, "");
     }
     source = std::move(rendered);
@@ -528,6 +570,7 @@ int run(Options opt) {
     seg.source = cge::dataset::parse_segmentation_source(opt.segmentation);
     seg.yolo_model_path = opt.model;
     seg.mask_folder = opt.masks;
+    apply_temporal_filter(opt.temporal_filter, opt.temporal_overlap, seg);
     if (cge::slam::uses_masks(settings.mode)) segmenter = cge::dataset::make_segmenter(seg, opt.dataset);
   }
   try {
@@ -638,6 +681,14 @@ int main(int argc, char** argv) {
                  "(default: ground_truth, none in mode none)");
   app.add_option("--model", opt.model, "YOLOv8-seg ONNX model (--segmentation yolo)");
   app.add_option("--masks", opt.masks, "mask folder (--segmentation precomputed)");
+  app.add_option("--temporal-filter", opt.temporal_filter,
+                 "--segmentation yolo: pass a static object's instance on once detected in N of the last M frames "
+                 "(N/M), people at once; off: every detection as the network gives it (docs/SEGMENTATION.md)")
+      ->capture_default_str();
+  app.add_option("--temporal-overlap", opt.temporal_overlap,
+                 "what the temporal filter's association compares between frames: box or mask IoU")
+      ->check(CLI::IsMember({"box", "mask"}))
+      ->capture_default_str();
   app.add_option("--settings", opt.settings, "ORB-SLAM2 TUM YAML settings (default: DATASET/camera.yaml)");
   app.add_option("--vocabulary", opt.vocabulary, "bag-of-words vocabulary (cge_vocab) enabling loop closing");
   app.add_option("--loop-correction", opt.loop_correction,

@@ -3,7 +3,9 @@
 // a synthetic sequence rendered in memory, and writes it in the text format of
 // docs/LOOP_CLOSING.md. Same arguments, same file.
 //
-// Exit codes: 0 done, 2 bad arguments or input (nothing written), 1 other failure.
+// --out is written beside its name and renamed into place when complete; missing folders on the way
+// are created (docs/CLI.md). Exit codes: 0 done, 2 bad arguments or input (nothing written), 1
+// other failure.
 
 #include <algorithm>
 #include <chrono>
@@ -67,6 +69,8 @@ std::vector<std::string> images_in_folder(const std::string& dir) {
 /// One path per line, or "timestamp path" (TUM rgb.txt); '#' starts a comment line; relative paths
 /// are relative to the list file's folder.
 std::vector<std::string> images_in_list(const std::string& file) {
+  std::error_code ec;
+  if (fs::is_directory(file, ec)) throw std::invalid_argument("--list: " + file + " is a directory, not a file");
   std::ifstream in(file);
   if (!in) throw std::invalid_argument("--list: cannot open " + file);
   const fs::path base = fs::path(file).parent_path();
@@ -96,54 +100,61 @@ std::vector<std::string> images_in_list(const std::string& file) {
 int run(const Options& opt) {
   const int sources = (opt.images_dir.empty() ? 0 : 1) + (opt.list_file.empty() ? 0 : 1) + (opt.preset.empty() ? 0 : 1);
   if (sources != 1) throw std::invalid_argument("give exactly one of --images, --list, --preset");
-  if (fs::exists(opt.out) && !opt.force) {
-    throw std::invalid_argument("--out: " + opt.out + " exists; pass --force to overwrite it");
+  cge_tool::check_output_file(opt.out, "--out", opt.force);
+  if (!opt.preset.empty()) {
+    if (opt.preset_frames < 1) {
+      throw cge_tool::UsageError("--frames must be at least 1, got " + std::to_string(opt.preset_frames));
+    }
+    cge_tool::require_at_most("--frames", opt.preset_frames, cge::sim::kMaxPresetFrames, "10 minutes at 30 Hz");
   }
-  if (fs::is_directory(opt.out)) throw std::invalid_argument("--out: " + opt.out + " is a folder");
   opt.training.vocabulary.validate();
 
+  // Images are turned into descriptors one at a time, so memory grows with the descriptors (the
+  // training's input), not with the images.
   const auto start = std::chrono::steady_clock::now();
-  std::vector<cv::Mat> images;
+  std::vector<std::vector<cge::bow::BinaryDescriptor>> documents;
+  std::size_t descriptors = 0;
+  const auto add_image = [&](const cv::Mat& image) {
+    documents.push_back(cge::slam::orb_descriptors(image, opt.training.orb_features));
+    descriptors += documents.back().size();
+  };
+  const auto full = [&] { return opt.max_images > 0 && static_cast<int>(documents.size()) >= opt.max_images; };
   std::string source;
   if (!opt.preset.empty()) {
     const cge::sim::SequenceRenderer renderer(cge::sim::make_preset(opt.preset, opt.preset_frames, opt.preset_seed));
-    for (int i = 0; i < renderer.frame_count(); i += opt.step) images.push_back(renderer.render(i).rgb);
+    for (int i = 0; i < renderer.frame_count() && !full(); i += opt.step) add_image(renderer.render(i).rgb);
     source = "preset " + opt.preset + " (" + std::to_string(opt.preset_frames) + " frames, seed " +
              std::to_string(opt.preset_seed) + ")";
   } else {
     const std::vector<std::string> paths =
         opt.images_dir.empty() ? images_in_list(opt.list_file) : images_in_folder(opt.images_dir);
-    for (std::size_t i = 0; i < paths.size(); i += static_cast<std::size_t>(opt.step)) {
-      if (opt.max_images > 0 && static_cast<int>(images.size()) >= opt.max_images) break;
-      cv::Mat img = cv::imread(paths[i], cv::IMREAD_COLOR);
+    for (std::size_t i = 0; i < paths.size() && !full(); i += static_cast<std::size_t>(opt.step)) {
+      std::error_code ec;
+      if (fs::is_directory(paths[i], ec)) throw std::invalid_argument("the image " + paths[i] + " is a directory");
+      const cv::Mat img = cv::imread(paths[i], cv::IMREAD_COLOR);
       if (img.empty()) throw std::invalid_argument("cannot read the image " + paths[i]);
-      images.push_back(img);
+      add_image(img);
     }
     source = opt.images_dir.empty() ? opt.list_file : opt.images_dir;
   }
-  if (opt.max_images > 0 && static_cast<int>(images.size()) > opt.max_images)
-    images.resize(static_cast<std::size_t>(opt.max_images));
 
-  // The same steps as cge::slam::train_vocabulary, unrolled to count the descriptors.
-  std::vector<std::vector<cge::bow::BinaryDescriptor>> documents;
-  std::size_t descriptors = 0;
-  for (std::size_t i = 0; i < images.size(); ++i) {
-    documents.push_back(cge::slam::orb_descriptors(images[i], opt.training.orb_features));
-    descriptors += documents.back().size();
-  }
   std::mt19937_64 engine(opt.training.seed);
   const cge::bow::Vocabulary v = cge::bow::Vocabulary::train(documents, opt.training.vocabulary, engine);
-  v.save_file(opt.out, opt.force);
+  cge_tool::CreatedFolders folders;
+  folders.create_parent_of(opt.out, "--out");
+  cge_tool::replace_file_with_stream(opt.out, [&v](std::ostream& f) { v.save(f); });
+  folders.keep();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::printf("source %s\n", source.c_str());
-  std::printf("images %zu\n", images.size());
+  std::printf("images %zu\n", documents.size());
   std::printf("descriptors %zu\n", descriptors);
   std::printf("branching %d\ndepth %d\nseed %llu\n", v.branching(), v.depth(),
               static_cast<unsigned long long>(opt.training.seed));
   std::printf("nodes %zu\nwords %zu\n", v.node_count(), v.word_count());
   std::printf("seconds %.2f\n", seconds);
   std::printf("output %s\n", opt.out.c_str());
+  if (!cge_tool::standard_output_written(kProgram)) return cge_tool::kExitFailure;
   return kExitOk;
 }
 
@@ -158,7 +169,7 @@ int main(int argc, char** argv) {
   app.add_option("--images", opt.images_dir, "folder of images (png, jpg, bmp, ppm, pgm, tif), used in name order");
   app.add_option("--list", opt.list_file, "list file: one image path per line, or a TUM rgb.txt");
   app.add_option("--preset", opt.preset, "render this synthetic preset in memory instead (e.g. walking_xyz)");
-  app.add_option("--frames", opt.preset_frames, "--preset: frames to render, >= 1")->capture_default_str();
+  app.add_option("--frames", opt.preset_frames, "--preset: frames to render, 1 .. " + std::to_string(cge::sim::kMaxPresetFrames))->capture_default_str();
   app.add_option("--preset-seed", opt.preset_seed, "--preset: the scene's seed")->capture_default_str();
   app.add_option("--out", opt.out, "vocabulary file to write; an existing file only with --force")->required();
   app.add_flag("--force", opt.force, "overwrite --out when it exists");

@@ -184,6 +184,7 @@ TEST_CASE("Segmentation source yolo: a YOLOv8-seg-shaped model with the chosen d
   settings.yolo_model_path = path;
   settings.yolo.confidence_threshold = 0.5f;
   settings.dynamic_class_ids = {0, 56};
+  settings.temporal_filter_sources.clear();  // the network alone
   const auto segmenter = make_segmenter(settings, tmp.path());
   const auto* yolo = dynamic_cast<const cge::Yolov8Segmenter*>(segmenter.get());
   REQUIRE(yolo != nullptr);
@@ -192,4 +193,49 @@ TEST_CASE("Segmentation source yolo: a YOLOv8-seg-shaped model with the chosen d
   CHECK(yolo->dynamic_classes() == std::set<int>{0, 56});
   cv::Mat image(32, 32, CV_8UC3, cv::Scalar::all(90));
   CHECK(segmenter->segment({image, "frame"}).empty());
+}
+
+TEST_CASE("Segmentation sources: the temporal instance filter wraps the sources named for it",
+          "[dataset][segmentation_source][temporal_filter]") {
+  namespace onnx = cge_test::onnx;
+  TempDir tmp{"cge_test_dataset_seg_temporal"};
+  onnx::YoloConstants c;
+  c.prediction.assign(cge::kYolov8PredictionRows, 0.f);
+  c.prototype.assign(cge::kYolov8MaskCoefficients, 0.f);
+  const std::string path = tmp.file("tiny.onnx");
+  onnx::write_file(path, onnx::yolo_shaped_model(c));
+
+  SegmentationSourceSettings settings;
+  CHECK(settings.temporal_filter_sources == std::set<SegmentationSource>{SegmentationSource::yolo});
+  settings.source = SegmentationSource::yolo;
+  settings.yolo_model_path = path;
+  settings.dynamic_class_ids = {0, 2};
+  settings.temporal_filter.min_frames_seen = 3;
+  settings.temporal_filter.window_frames = 4;
+  settings.temporal_filter.overlap = cge::TemporalOverlap::mask;
+  const auto segmenter = make_segmenter(settings, tmp.path());
+  const auto* filter = dynamic_cast<const cge::TemporalInstanceFilter*>(segmenter.get());
+  REQUIRE(filter != nullptr);
+  CHECK(filter->settings().min_frames_seen == 3);
+  CHECK(filter->settings().window_frames == 4);
+  CHECK(filter->settings().overlap == cge::TemporalOverlap::mask);
+  const auto* yolo = dynamic_cast<const cge::Yolov8Segmenter*>(&filter->inner());
+  REQUIRE(yolo != nullptr);
+  CHECK(yolo->model_path() == path);
+  CHECK(segmenter->dynamic_classes() == std::set<int>{0, 2});
+  cv::Mat image(32, 32, CV_8UC3, cv::Scalar::all(90));
+  CHECK(segmenter->segment({image, "frame"}).empty());
+
+  // The none source is not named: no wrapper. Named, it is wrapped.
+  SegmentationSourceSettings none;
+  CHECK(dynamic_cast<const cge::dataset::NoSegmenter*>(make_segmenter(none, tmp.path()).get()) != nullptr);
+  none.temporal_filter_sources = {SegmentationSource::none};
+  CHECK(dynamic_cast<const cge::TemporalInstanceFilter*>(make_segmenter(none, tmp.path()).get()) != nullptr);
+
+  // Bad filter settings are named, but only when a source is filtered.
+  settings.temporal_filter.min_frames_seen = 5;
+  CHECK_THAT(invalid_argument_message([&] { make_segmenter(settings, tmp.path()); }),
+             Contains("temporal_filter") && Contains("min_frames_seen"));
+  settings.temporal_filter_sources.clear();
+  CHECK_NOTHROW(make_segmenter(settings, tmp.path()));
 }

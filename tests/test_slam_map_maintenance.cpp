@@ -110,7 +110,8 @@ void check_map_consistent(const Map& map) {
     for (const auto& a : p.observations) {
       CHECK(map.keyframe(a.keyframe_id).map_point_ids[static_cast<std::size_t>(a.keypoint_index)] == p.id);
       for (const auto& b : p.observations) {
-        if (a.keyframe_id != b.keyframe_id) ++shared[static_cast<std::size_t>(a.keyframe_id)][static_cast<std::size_t>(b.keyframe_id)];
+        if (a.keyframe_id != b.keyframe_id)
+          ++shared[static_cast<std::size_t>(a.keyframe_id)][static_cast<std::size_t>(b.keyframe_id)];
       }
     }
   }
@@ -164,19 +165,25 @@ TEST_CASE("Map keeps undistorted pixels, creation keyframes and found/visible co
   Keyframe wrong = plain_keyframe(3);
   wrong.undistorted_px.pop_back();
   CHECK_THROWS_AS(map.add_keyframe(wrong), std::invalid_argument);
+  Keyframe narrow = plain_keyframe(3);
+  narrow.descriptors = cv::Mat::zeros(3, 16, CV_8UC1);  // the matching reads 32 bytes per row
+  CHECK(cge_test::invalid_argument_message([&] { map.add_keyframe(narrow); }).find("32-byte") != std::string::npos);
   Keyframe culled = plain_keyframe(3);
   culled.culled = true;
   CHECK_THROWS_AS(map.add_keyframe(culled), std::invalid_argument);
 
   const std::int64_t a = map.add_map_point(Eigen::Vector3d(0, 0, 2), zero_descriptor());
   const std::int64_t b = map.add_map_point(Eigen::Vector3d(0, 0, 2), zero_descriptor(), 0);
+  CHECK_THROWS_AS(map.add_map_point(Eigen::Vector3d(0, 0, 2), cv::Mat::zeros(1, 16, CV_8UC1)), std::invalid_argument);
+  CHECK_THROWS_AS(map.add_map_point(Eigen::Vector3d(0, 0, 2), cv::Mat::zeros(1, 32, CV_32F)), std::invalid_argument);
   CHECK(map.map_point(a).created_by_keyframe == -1);
   CHECK(map.map_point(b).created_by_keyframe == 0);
   CHECK(map.map_point(a).visible == 1);
   CHECK(map.map_point(a).found == 1);
   CHECK_FALSE(map.map_point(a).bad);
-  CHECK(cge_test::invalid_argument_message([&] { map.add_map_point(Eigen::Vector3d(0, 0, 2), zero_descriptor(), 1); })
-            .find("keyframe 1") != std::string::npos);
+  CHECK(cge_test::invalid_argument_message([&] {
+          map.add_map_point(Eigen::Vector3d(0, 0, 2), zero_descriptor(), 1);
+        }).find("keyframe 1") != std::string::npos);
   map.increase_visible(a, 3);
   map.increase_found(a);
   CHECK(map.map_point(a).visible == 4);
@@ -374,8 +381,7 @@ TEST_CASE("Map covisibility stays exact through random erase, replace and cull s
 
 // ---- map-point culling ------------------------------------------------------------------------------
 
-TEST_CASE("cull_recent_map_points: found ratio, young points with few observations, maturity",
-          "[maintenance][slam]") {
+TEST_CASE("cull_recent_map_points: found ratio, young points with few observations, maturity", "[maintenance][slam]") {
   Map map;
   // Keypoints 0..3 with depth (weight 2), 4..7 without (weight 1).
   for (int k = 0; k < 5; ++k) {
@@ -393,17 +399,17 @@ TEST_CASE("cull_recent_map_points: found ratio, young points with few observatio
   map.increase_visible(at_ratio, 3);
   const std::int64_t low_ratio = point(3, {{3, 1}, {4, 1}});  // 1/5 < 0.25: erased
   map.increase_visible(low_ratio, 4);
-  const std::int64_t young_three = point(2, {{2, 0}, {3, 4}});  // age 2, weight 2 + 1 = 3 <= 3: erased
-  const std::int64_t young_four = point(2, {{2, 1}, {3, 2}});   // age 2, weight 4 > 3: kept, stays recent
-  const std::int64_t age_one_light = point(3, {{3, 5}});        // age 1, weight 1: too young to judge
-  const std::int64_t mature = point(1, {{1, 0}, {2, 2}});       // age 3, weight 4: leaves the list, kept
-  const std::int64_t mature_light = point(1, {{1, 4}, {4, 5}}); // age 3, weight 2 <= 3: erased (checked first)
+  const std::int64_t young_three = point(2, {{2, 0}, {3, 4}});   // age 2, weight 2 + 1 = 3 <= 3: erased
+  const std::int64_t young_four = point(2, {{2, 1}, {3, 2}});    // age 2, weight 4 > 3: kept, stays recent
+  const std::int64_t age_one_light = point(3, {{3, 5}});         // age 1, weight 1: too young to judge
+  const std::int64_t mature = point(1, {{1, 0}, {2, 2}});        // age 3, weight 4: leaves the list, kept
+  const std::int64_t mature_light = point(1, {{1, 4}, {4, 5}});  // age 3, weight 2 <= 3: erased (checked first)
   const std::int64_t already_bad = point(3, {{3, 3}});
   map.erase_map_point(already_bad);
   check_map_consistent(map);
 
-  std::vector<std::int64_t> recent{at_ratio, low_ratio, young_three, young_four, age_one_light, mature, mature_light,
-                                   already_bad};
+  std::vector<std::int64_t> recent{at_ratio,      low_ratio, young_three,  young_four,
+                                   age_one_light, mature,    mature_light, already_bad};
   const std::vector<std::int64_t> before = recent;
   MapMaintenanceSettings settings;
   // Errors leave the list and the map untouched.
@@ -443,14 +449,14 @@ TEST_CASE("fuse_map_points merges duplicates and adds observations within the ch
   std::vector<Eigen::Isometry3d> pose;
   for (int k = 0; k < 5; ++k) pose.push_back(at_x(0.1 * k));
   // Physical points, far apart in the images.
-  const Eigen::Vector3d S(-0.8, -0.5, 3.5), A(-0.3, -0.4, 3.0), H(0.4, -0.4, 3.0), B(-0.6, 0.2, 2.5),
-      C(-0.2, 0.2, 2.5), D(0.2, 0.2, 2.5), E(0.6, 0.2, 2.5), F(-0.6, 0.6, 2.5), G(-0.1, 0.6, 2.5), Q(0.9, 0.6, 3.0);
+  const Eigen::Vector3d S(-0.8, -0.5, 3.5), A(-0.3, -0.4, 3.0), H(0.4, -0.4, 3.0), B(-0.6, 0.2, 2.5), C(-0.2, 0.2, 2.5),
+      D(0.2, 0.2, 2.5), E(0.6, 0.2, 2.5), F(-0.6, 0.6, 2.5), G(-0.1, 0.6, 2.5), Q(0.9, 0.6, 3.0);
   const Eigen::Vector3d mm(0.001, 0, 0);  // the duplicates made by keyframe 2 sit 1 mm off
   std::map<char, cv::Mat> desc;
   for (const char c : std::string("SAHBCDEFGQ")) desc[c] = random_descriptor(rng);
 
-  const auto kp_at = [&](int k, const Eigen::Vector3d& p, const cv::Mat& d, double depth, int octave = 0,
-                         double du = 0, cge::FeatureLabel label = cge::FeatureLabel::static_feature) {
+  const auto kp_at = [&](int k, const Eigen::Vector3d& p, const cv::Mat& d, double depth, int octave = 0, double du = 0,
+                         cge::FeatureLabel label = cge::FeatureLabel::static_feature) {
     const Eigen::Vector2d uv = pixel_of(pose[static_cast<std::size_t>(k)], p);
     return Kp{uv.x() + du, uv.y(), octave, depth, label, d};
   };
@@ -459,11 +465,11 @@ TEST_CASE("fuse_map_points merges duplicates and adds observations within the ch
   // kf3: Q only (a second neighbour of kf2, through kf1).   kf4: a keypoint where B projects, never a
   // target (it shares no point with anyone).
   map.add_keyframe(make_keyframe(pose[0], {kp_at(0, S, desc['S'], 3.5), kp_at(0, A, desc['A'], 3.0)}));
-  map.add_keyframe(make_keyframe(
-      pose[1], {kp_at(1, S, desc['S'], 3.5), kp_at(1, A, desc['A'], 3.0), kp_at(1, B, desc['B'], 2.5),
-                kp_at(1, C, desc['C'], 2.5), kp_at(1, D, desc['D'], 2.5), kp_at(1, E, desc['E'], 2.5),
-                kp_at(1, F, desc['F'], 2.5), kp_at(1, G, desc['G'], 2.5), kp_at(1, H, desc['H'], 3.0),
-                kp_at(1, Q, desc['Q'], 3.0)}));
+  map.add_keyframe(
+      make_keyframe(pose[1], {kp_at(1, S, desc['S'], 3.5), kp_at(1, A, desc['A'], 3.0), kp_at(1, B, desc['B'], 2.5),
+                              kp_at(1, C, desc['C'], 2.5), kp_at(1, D, desc['D'], 2.5), kp_at(1, E, desc['E'], 2.5),
+                              kp_at(1, F, desc['F'], 2.5), kp_at(1, G, desc['G'], 2.5), kp_at(1, H, desc['H'], 3.0),
+                              kp_at(1, Q, desc['Q'], 3.0)}));
   // kf2's keypoints, by index:
   //  0 S (observes S)     1 A' (observes its own duplicate of A, weight 2 vs A's 4: A stays)
   //  2 H' (own duplicate of H, weight 2 = H's 2: the projected H' stays, H is replaced)
@@ -473,12 +479,12 @@ TEST_CASE("fuse_map_points merges duplicates and adds observations within the ch
   //  6 E at the projection, 51 bits off: over TH_LOW, not fused
   //  7 F at the projection, 50 bits off: fused
   //  8 G at the projection, same descriptor, but dynamic: never a candidate
-  map.add_keyframe(make_keyframe(
-      pose[2], {kp_at(2, S, desc['S'], 3.5), kp_at(2, A + mm, flipped(desc['A'], 5), 3.0),
-                kp_at(2, H + mm, flipped(desc['H'], 5), 3.0), kp_at(2, B, flipped(desc['B'], 10), 2.5),
-                kp_at(2, C, desc['C'], 2.5, 0, 2.5), kp_at(2, D, desc['D'], 2.5, 1, 2.88),
-                kp_at(2, E, flipped(desc['E'], 51), 2.5), kp_at(2, F, flipped(desc['F'], 50), 2.5),
-                kp_at(2, G, desc['G'], 2.5, 0, 0, cge::FeatureLabel::dynamic_by_mask)}));
+  map.add_keyframe(
+      make_keyframe(pose[2], {kp_at(2, S, desc['S'], 3.5), kp_at(2, A + mm, flipped(desc['A'], 5), 3.0),
+                              kp_at(2, H + mm, flipped(desc['H'], 5), 3.0), kp_at(2, B, flipped(desc['B'], 10), 2.5),
+                              kp_at(2, C, desc['C'], 2.5, 0, 2.5), kp_at(2, D, desc['D'], 2.5, 1, 2.88),
+                              kp_at(2, E, flipped(desc['E'], 51), 2.5), kp_at(2, F, flipped(desc['F'], 50), 2.5),
+                              kp_at(2, G, desc['G'], 2.5, 0, 0, cge::FeatureLabel::dynamic_by_mask)}));
   map.add_keyframe(make_keyframe(pose[3], {kp_at(3, Q, desc['Q'], 3.0)}));
   map.add_keyframe(make_keyframe(pose[4], {kp_at(4, B, desc['B'], 2.5)}));
 
@@ -617,6 +623,94 @@ TEST_CASE("cull_redundant_keyframes culls keyframes whose close points three oth
   const cge::slam::KeyframeCullingReport again = cge::slam::cull_redundant_keyframes(map, 6, settings);
   CHECK(again.culled.empty());
   CHECK(again.examined == std::vector<int>{1, 2, 5});
+}
+
+// ---- triangulation -------------------------------------------------------------------------------
+
+TEST_CASE("triangulate_new_points makes points for matched keypoints without depth", "[maintenance][slam]") {
+  std::mt19937 rng(11);
+  // Keyframe 1 is the new one; keyframe 0 is its neighbour, where the epipolar band is measured.
+  const Eigen::Isometry3d pose0 = Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d pose1 = some_pose(0.05, Eigen::Vector3d(0.3, 0.02, 0.05));
+  // Shared points with depth make the keyframes covisible (and give keyframe 0 its median depth).
+  std::vector<Eigen::Vector3d> anchors;
+  for (int j = 0; j < 5; ++j) anchors.emplace_back(-0.8 + 0.4 * j, -0.7, 3.0);
+  // Points seen without depth, keyframe 1's descriptor 3 bits off keyframe 0's unless said:
+  //   0..4 triangulated; 5 is 50 bits off (TH_LOW, still matched) and triangulated; 6 is 51 bits off:
+  //   no match; 7 is 2000 m away: matched, but the rays are nearly parallel (cosine >= 0.9998);
+  //   8 has keyframe 0's keypoint 2.1 px off the epipolar line (chi2 ~4.4 >= 3.84): no match;
+  //   9 is 1.8 px off (chi2 ~3.2): matched and triangulated, a few millimetres off.
+  std::vector<Eigen::Vector3d> targets;
+  for (int j = 0; j < 6; ++j) targets.emplace_back(-0.9 + 0.35 * j, 0.1 * (j % 3), 2.5 + 0.3 * j);
+  targets.emplace_back(0.2, 0.5, 2.8);
+  targets.emplace_back(120.0, 0.1 * 2000 / 3, 2000.0);
+  targets.emplace_back(-0.4, 0.6, 3.2);
+  targets.emplace_back(0.5, 0.35, 2.7);
+  std::vector<cv::Mat> desc;
+  for (std::size_t j = 0; j < targets.size(); ++j) desc.push_back(random_descriptor(rng));
+  std::vector<Kp> kps0, kps1;
+  for (const Eigen::Vector3d& a : anchors) {
+    const Eigen::Vector2d u0 = pixel_of(pose0, a), u1 = pixel_of(pose1, a);
+    kps0.push_back(kp_of(u0.x(), u0.y(), 0, (pose0.inverse() * a).z()));
+    kps1.push_back(kp_of(u1.x(), u1.y(), 0, (pose1.inverse() * a).z()));
+  }
+  for (std::size_t j = 0; j < targets.size(); ++j) {
+    const Eigen::Vector2d u0 = pixel_of(pose0, targets[j]), u1 = pixel_of(pose1, targets[j]);
+    REQUIRE((u0.x() > 0 && u0.x() < 640 && u0.y() > 0 && u0.y() < 480));
+    REQUIRE((u1.x() > 0 && u1.x() < 640 && u1.y() > 0 && u1.y() < 480));
+    const int octave = j >= 8 ? 0 : static_cast<int>(j % 2);
+    const double off = j == 8 ? 2.1 : j == 9 ? 1.8 : 0.0;  // across the nearly horizontal epipolar lines
+    const int bits = j == 5 ? 50 : j == 6 ? 51 : 3;
+    kps0.push_back(Kp{u0.x(), u0.y() + off, octave, kNaN, cge::FeatureLabel::static_feature, desc[j]});
+    kps1.push_back(Kp{u1.x(), u1.y(), octave, kNaN, cge::FeatureLabel::static_feature, flipped(desc[j], bits)});
+  }
+  // A keypoint with depth in keyframe 0 is never used (it had its chance to make a point at insertion).
+  const Eigen::Vector3d with_depth(0.7, -0.3, 2.6);
+  const cv::Mat d_depth = random_descriptor(rng);
+  kps0.push_back(Kp{pixel_of(pose0, with_depth).x(), pixel_of(pose0, with_depth).y(), 0, 2.6,
+                    cge::FeatureLabel::static_feature, d_depth});
+  kps1.push_back(Kp{pixel_of(pose1, with_depth).x(), pixel_of(pose1, with_depth).y(), 0, kNaN,
+                    cge::FeatureLabel::static_feature, d_depth});
+  Map map;
+  map.add_keyframe(make_keyframe(pose0, kps0));
+  map.add_keyframe(make_keyframe(pose1, kps1));
+  for (std::size_t j = 0; j < anchors.size(); ++j) {
+    const std::int64_t id = map.add_map_point(anchors[j], zero_descriptor(), 0);
+    map.add_observation(id, 0, static_cast<int>(j));
+    map.add_observation(id, 1, static_cast<int>(j));
+  }
+  const std::int64_t before = map.map_point_count();
+
+  MapMaintenanceSettings settings;
+  CHECK_THROWS_AS(cge::slam::triangulate_new_points(map, 2, kIntrinsics, 1.2, settings), std::invalid_argument);
+  CHECK_THROWS_AS(cge::slam::triangulate_new_points(map, 1, kIntrinsics, 0.9, settings), std::invalid_argument);
+  const cge::slam::TriangulationReport r = cge::slam::triangulate_new_points(map, 1, kIntrinsics, 1.2, settings);
+  check_map_consistent(map);
+  CHECK(r.neighbours == std::vector<int>{0});
+  CHECK(r.matches == 8);  // 0..5, 7 and 9
+  const std::vector<std::size_t> made{0, 1, 2, 3, 4, 5, 9};
+  REQUIRE(r.created.size() == made.size());
+  const std::size_t first = anchors.size();
+  for (std::size_t m = 0; m < made.size(); ++m) {
+    const std::size_t j = made[m];
+    CAPTURE(j);
+    const cge::slam::MapPoint& p = map.map_point(r.created[m]);
+    CHECK(p.id == before + static_cast<std::int64_t>(m));
+    CHECK(p.created_by_keyframe == 1);
+    // Exact pixels (stored as float) give the point to micrometres; 1.8 px of disagreement to millimetres.
+    CHECK((p.position_world - targets[j]).norm() < (j == 9 ? 0.02 : 1e-4));
+    CHECK(map.keyframe(0).map_point_ids[first + j] == p.id);
+    CHECK(map.keyframe(1).map_point_ids[first + j] == p.id);
+    CHECK(cv::norm(p.descriptor, map.keyframe(1).descriptors.row(static_cast<int>(first + j)), cv::NORM_HAMMING) == 0);
+  }
+  for (const std::size_t j : {6u, 7u, 8u, 10u}) {
+    CAPTURE(j);
+    CHECK(map.keyframe(0).map_point_ids[first + j] == -1);
+    CHECK(map.keyframe(1).map_point_ids[first + j] == -1);
+  }
+  CHECK(map.shared_points(0, 1) == 5 + 7);
+  // Matched keypoints observe their points now: a second run makes nothing.
+  CHECK(cge::slam::triangulate_new_points(map, 1, kIntrinsics, 1.2, settings).created.empty());
 }
 
 TEST_CASE("MapMaintenanceSettings::validate names the field", "[maintenance][slam]") {

@@ -73,8 +73,19 @@ void NoSegmenter::set_dynamic_classes(const std::set<int>& class_ids) {
   dynamic_class_ids_ = class_ids;
 }
 
-std::unique_ptr<InstanceSegmenter> make_segmenter(const SegmentationSourceSettings& settings,
-                                                  const fs::path& dataset_folder) {
+void SegmentationSourceSettings::validate() const {
+  if (temporal_filter_sources.empty()) return;
+  try {
+    temporal_filter.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("SegmentationSourceSettings: temporal_filter: ") + e.what());
+  }
+}
+
+namespace {
+
+std::unique_ptr<InstanceSegmenter> make_unfiltered_segmenter(const SegmentationSourceSettings& settings,
+                                                             const fs::path& dataset_folder) {
   switch (settings.source) {
     case SegmentationSource::none:
       return std::make_unique<NoSegmenter>(settings.dynamic_class_ids);
@@ -109,6 +120,16 @@ std::unique_ptr<InstanceSegmenter> make_segmenter(const SegmentationSourceSettin
                                 settings.dynamic_class_ids);
   }
   throw std::invalid_argument("make_segmenter: invalid segmentation source");
+}
+
+}  // namespace
+
+std::unique_ptr<InstanceSegmenter> make_segmenter(const SegmentationSourceSettings& settings,
+                                                  const fs::path& dataset_folder) {
+  settings.validate();
+  std::unique_ptr<InstanceSegmenter> segmenter = make_unfiltered_segmenter(settings, dataset_folder);
+  if (settings.temporal_filter_sources.count(settings.source) == 0) return segmenter;
+  return std::make_unique<TemporalInstanceFilter>(std::move(segmenter), settings.temporal_filter);
 }
 
 }  // namespace dataset

@@ -501,8 +501,9 @@ void validate_preset_settings(const PresetSettings& s) {
   if (!positive(s.frame_rate_hz)) throw std::invalid_argument("PresetSettings.frame_rate_hz must be finite and > 0");
   if (!std::isfinite(s.start_timestamp_s))
     throw std::invalid_argument("PresetSettings.start_timestamp_s must be finite");
-  if (!positive(s.walking_speed_mps))
-    throw std::invalid_argument("PresetSettings.walking_speed_mps must be finite and > 0");
+  if (!(positive(s.walking_speed_mps) && s.walking_speed_mps <= kMaxWalkingSpeedMps))
+    throw std::invalid_argument("PresetSettings.walking_speed_mps must be > 0 and at most " +
+                                std::to_string(kMaxWalkingSpeedMps) + " m/s");
   if (!(std::isfinite(s.pause_s) && s.pause_s >= 0))
     throw std::invalid_argument("PresetSettings.pause_s must be finite and >= 0");
   if (s.loop_laps < 2) {
@@ -530,8 +531,9 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
     for (const char* n : kPresetNames) msg << ' ' << n;
     throw std::invalid_argument(msg.str());
   }
-  if (frames < 1) {
-    throw std::invalid_argument("make_preset(" + name + "): frames must be >= 1 (got " + std::to_string(frames) + ")");
+  if (frames < 1 || frames > kMaxPresetFrames) {
+    throw std::invalid_argument("make_preset(" + name + "): frames must lie in 1 .. " +
+                                std::to_string(kMaxPresetFrames) + " (got " + std::to_string(frames) + ")");
   }
   validate_preset_settings(settings);
 

@@ -180,6 +180,11 @@ int draw_false_positive(cv::Mat& out, std::uint16_t id, DrawStream& draws, const
 }  // namespace
 
 void validate(const SegmentationErrorSettings& s) {
+  if (s.boundary_offset_px < -kMaxBoundaryOffsetPx || s.boundary_offset_px > kMaxBoundaryOffsetPx) {
+    throw std::invalid_argument("SegmentationErrorSettings: boundary_offset_px must lie in -" +
+                                std::to_string(kMaxBoundaryOffsetPx) + " .. " + std::to_string(kMaxBoundaryOffsetPx) +
+                                " pixels, got " + std::to_string(s.boundary_offset_px));
+  }
   require_probability("feet_loss_probability", s.feet_loss_probability);
   require_probability("feet_loss_fraction", s.feet_loss_fraction);
   require_probability("miss_probability", s.miss_probability);

@@ -74,6 +74,10 @@ int Map::add_keyframe(Keyframe keyframe) {
     throw std::invalid_argument("Map::add_keyframe: the keyframe of frame " + std::to_string(keyframe.frame_index) +
                                 " has per-keypoint vectors of different lengths");
   }
+  if (n > 0 && (keyframe.descriptors.cols != 32 || keyframe.descriptors.type() != CV_8UC1)) {
+    throw std::invalid_argument("Map::add_keyframe: the keyframe of frame " + std::to_string(keyframe.frame_index) +
+                                " needs one 32-byte CV_8UC1 descriptor row (ORB) per keypoint");
+  }
   if (std::any_of(keyframe.map_point_ids.begin(), keyframe.map_point_ids.end(),
                   [](std::int64_t p) { return p != -1; })) {
     throw std::invalid_argument("Map::add_keyframe: map_point_ids must be -1; use add_observation");
@@ -93,8 +97,8 @@ int Map::add_keyframe(Keyframe keyframe) {
 
 std::int64_t Map::add_map_point(const Eigen::Vector3d& position_world, const cv::Mat& descriptor,
                                 int created_by_keyframe) {
-  if (descriptor.rows != 1 || descriptor.type() != CV_8UC1) {
-    throw std::invalid_argument("Map::add_map_point: the descriptor must be one CV_8UC1 row");
+  if (descriptor.rows != 1 || descriptor.cols != 32 || descriptor.type() != CV_8UC1) {
+    throw std::invalid_argument("Map::add_map_point: the descriptor must be one 32-byte CV_8UC1 row (ORB)");
   }
   if (created_by_keyframe != -1) check_keyframe(created_by_keyframe, "Map::add_map_point (created_by_keyframe)");
   MapPoint p;

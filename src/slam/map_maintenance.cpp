@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/SVD>
+
 #include "cge/bow/binary_descriptor.hpp"
 
 namespace cge {
@@ -25,6 +27,17 @@ void MapMaintenanceSettings::validate() const {
   if (redundant_min_observers < 1) fail("redundant_min_observers must be at least 1");
   if (redundant_octave_tolerance < 0) fail("redundant_octave_tolerance must not be negative");
   if (!(redundant_fraction >= 0 && redundant_fraction <= 1)) fail("redundant_fraction must be in [0, 1]");
+  if (triangulation_neighbours < 0) fail("triangulation_neighbours must not be negative");
+  if (triangulation_max_hamming < 0 || triangulation_max_hamming > 256)
+    fail("triangulation_max_hamming must be in 0 .. 256");
+  if (!(triangulation_ratio > 0 && triangulation_ratio <= 1)) fail("triangulation_ratio must be in (0, 1]");
+  if (!(triangulation_epipolar_chi2 > 0)) fail("triangulation_epipolar_chi2 must be > 0");
+  if (!(triangulation_epipole_px >= 0)) fail("triangulation_epipole_px must not be negative");
+  if (!(triangulation_chi2 > 0)) fail("triangulation_chi2 must be > 0");
+  if (!(triangulation_max_parallax_cos > 0 && triangulation_max_parallax_cos <= 1))
+    fail("triangulation_max_parallax_cos must be in (0, 1]");
+  if (!(triangulation_scale_tolerance >= 1)) fail("triangulation_scale_tolerance must be >= 1");
+  if (!(triangulation_min_baseline_ratio >= 0)) fail("triangulation_min_baseline_ratio must not be negative");
 }
 
 namespace {
@@ -248,7 +261,8 @@ KeyframeCullingReport cull_redundant_keyframes(Map& map, int keyframe_id, const 
       int observers = 0;
       for (const Observation& o : map.map_point(id).observations) {
         if (o.keyframe_id == k) continue;
-        const int other_octave = map.keyframe(o.keyframe_id).keypoints[static_cast<std::size_t>(o.keypoint_index)].octave;
+        const int other_octave =
+            map.keyframe(o.keyframe_id).keypoints[static_cast<std::size_t>(o.keypoint_index)].octave;
         if (other_octave <= octave + s.redundant_octave_tolerance) ++observers;
         if (observers >= s.redundant_min_observers) break;
       }
@@ -259,6 +273,166 @@ KeyframeCullingReport cull_redundant_keyframes(Map& map, int keyframe_id, const 
     if (parent.empty()) continue;  // shares nothing with a live keyframe: no pose to hang from
     map.cull_keyframe(k, parent.front());
     report.culled.push_back(k);
+  }
+  return report;
+}
+
+namespace {
+
+/// Camera-from-world rotation and translation of a pose.
+struct CameraFromWorld {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  Eigen::Vector3d centre;  ///< camera centre in the world
+  explicit CameraFromWorld(const Eigen::Isometry3d& T_world_camera)
+      : R(T_world_camera.linear().transpose()),
+        t(-(T_world_camera.linear().transpose() * T_world_camera.translation())),
+        centre(T_world_camera.translation()) {}
+};
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+double median_point_depth(const Map& map, const Keyframe& kf, const CameraFromWorld& c) {
+  std::vector<double> z;
+  for (const std::int64_t p : kf.map_point_ids) {
+    if (p >= 0) z.push_back((c.R * map.map_point(p).position_world + c.t).z());
+  }
+  if (z.empty()) return std::nan("");
+  const auto mid = z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2);
+  std::nth_element(z.begin(), mid, z.end());
+  return *mid;
+}
+
+/// Linear (DLT) triangulation from normalised image coordinates of two cameras; NaN when degenerate.
+Eigen::Vector3d triangulate_dlt(const Eigen::Vector2d& x1, const CameraFromWorld& c1, const Eigen::Vector2d& x2,
+                                const CameraFromWorld& c2) {
+  Eigen::Matrix<double, 3, 4> P1, P2;
+  P1 << c1.R, c1.t;
+  P2 << c2.R, c2.t;
+  Eigen::Matrix4d A;
+  A.row(0) = x1.x() * P1.row(2) - P1.row(0);
+  A.row(1) = x1.y() * P1.row(2) - P1.row(1);
+  A.row(2) = x2.x() * P2.row(2) - P2.row(0);
+  A.row(3) = x2.y() * P2.row(2) - P2.row(1);
+  const Eigen::JacobiSVD<Eigen::Matrix4d> svd(A, Eigen::ComputeFullV);
+  const Eigen::Vector4d X = svd.matrixV().col(3);
+  if (X(3) == 0) return Eigen::Vector3d::Constant(std::nan(""));
+  return X.head<3>() / X(3);
+}
+
+bool usable_for_triangulation(const Keyframe& kf, int i) {
+  return is_static(kf, i) && kf.map_point_ids[static_cast<std::size_t>(i)] < 0 && !has_depth(kf, i);
+}
+
+}  // namespace
+
+TriangulationReport triangulate_new_points(Map& map, int keyframe_id, const PinholeIntrinsics<double>& K,
+                                           double scale_factor, const MapMaintenanceSettings& s) {
+  check_live(map, keyframe_id, "triangulate_new_points");
+  check_scale_factor(scale_factor, "triangulate_new_points");
+  TriangulationReport report;
+  report.neighbours = map.covisible_keyframes(keyframe_id, s.triangulation_neighbours);
+  std::sort(report.neighbours.begin(), report.neighbours.end());
+  const CameraFromWorld c1(map.keyframe(keyframe_id).T_world_camera);
+  const auto normalised = [&](const cv::Point2f& px) {
+    return Eigen::Vector2d((px.x - K.cx_px) / K.fx_px, (px.y - K.cy_px) / K.fy_px);
+  };
+  Eigen::Matrix3d K_inv = Eigen::Matrix3d::Identity();
+  K_inv(0, 0) = 1 / K.fx_px;
+  K_inv(1, 1) = 1 / K.fy_px;
+  K_inv(0, 2) = -K.cx_px / K.fx_px;
+  K_inv(1, 2) = -K.cy_px / K.fy_px;
+  for (const int n : report.neighbours) {
+    const Keyframe& kf1 = map.keyframe(keyframe_id);
+    const Keyframe& kf2 = map.keyframe(n);
+    const CameraFromWorld c2(kf2.T_world_camera);
+    const double median_depth = median_point_depth(map, kf2, c2);
+    if (!(median_depth > 0) || (c2.centre - c1.centre).norm() / median_depth < s.triangulation_min_baseline_ratio) {
+      continue;
+    }
+    // Epipolar geometry: x2^T F21 x1 = 0 with x2 = R21 x1 + t21 in camera coordinates.
+    const Eigen::Matrix3d R21 = c2.R * c1.R.transpose();
+    const Eigen::Vector3d t21 = c2.t - R21 * c1.t;
+    const Eigen::Matrix3d F21 = K_inv.transpose() * skew(t21) * R21 * K_inv;
+    const Eigen::Vector3d centre1_in_2 = c2.R * c1.centre + c2.t;
+    const bool has_epipole = centre1_in_2.z() > 0;
+    const Eigen::Vector2d epipole = has_epipole ? K.project(centre1_in_2) : Eigen::Vector2d::Zero();
+    std::vector<char> used(kf2.keypoints.size(), 0);
+    std::vector<std::pair<int, int>> matches;  // (keypoint in kf1, keypoint in kf2)
+    for (int i = 0; i < static_cast<int>(kf1.keypoints.size()); ++i) {
+      if (!usable_for_triangulation(kf1, i)) continue;
+      const cv::Point2f& p1 = kf1.undistorted_px[static_cast<std::size_t>(i)];
+      const Eigen::Vector3d line = F21 * Eigen::Vector3d(p1.x, p1.y, 1);
+      const double line_norm2 = line.x() * line.x() + line.y() * line.y();
+      if (!(line_norm2 > 0)) continue;
+      const std::uint8_t* d1 = kf1.descriptors.ptr<std::uint8_t>(i);
+      int best = INT_MAX, second = INT_MAX, best_j = -1;
+      for (int j = 0; j < static_cast<int>(kf2.keypoints.size()); ++j) {
+        if (used[static_cast<std::size_t>(j)] || !usable_for_triangulation(kf2, j)) continue;
+        const cv::Point2f& p2 = kf2.undistorted_px[static_cast<std::size_t>(j)];
+        const double sigma2 = std::pow(level_scale(scale_factor, kf2.keypoints[static_cast<std::size_t>(j)].octave), 2);
+        if (has_epipole) {
+          const double ex = p2.x - epipole.x(), ey = p2.y - epipole.y();
+          const double limit = s.triangulation_epipole_px * s.triangulation_epipole_px *
+                               level_scale(scale_factor, kf2.keypoints[static_cast<std::size_t>(j)].octave);
+          if (ex * ex + ey * ey < limit) continue;
+        }
+        const double num = line.x() * p2.x + line.y() * p2.y + line.z();
+        if (!(num * num / line_norm2 < s.triangulation_epipolar_chi2 * sigma2)) continue;
+        const int d = bow::hamming_distance_32_bytes(d1, kf2.descriptors.ptr<std::uint8_t>(j));
+        if (d < best) {
+          second = best;
+          best = d;
+          best_j = j;
+        } else if (d < second) {
+          second = d;
+        }
+      }
+      if (best_j < 0 || best > s.triangulation_max_hamming) continue;
+      if (second != INT_MAX && !(best < s.triangulation_ratio * second)) continue;
+      used[static_cast<std::size_t>(best_j)] = 1;
+      matches.emplace_back(i, best_j);
+    }
+    report.matches += static_cast<int>(matches.size());
+
+    for (const auto& [i, j] : matches) {
+      const cv::KeyPoint& kp1 = kf1.keypoints[static_cast<std::size_t>(i)];
+      const cv::KeyPoint& kp2 = kf2.keypoints[static_cast<std::size_t>(j)];
+      const Eigen::Vector2d x1 = normalised(kf1.undistorted_px[static_cast<std::size_t>(i)]);
+      const Eigen::Vector2d x2 = normalised(kf2.undistorted_px[static_cast<std::size_t>(j)]);
+      const Eigen::Vector3d ray1 = c1.R.transpose() * Eigen::Vector3d(x1.x(), x1.y(), 1);
+      const Eigen::Vector3d ray2 = c2.R.transpose() * Eigen::Vector3d(x2.x(), x2.y(), 1);
+      const double cos_parallax = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
+      if (!(cos_parallax > 0 && cos_parallax < s.triangulation_max_parallax_cos)) continue;
+      const Eigen::Vector3d X = triangulate_dlt(x1, c1, x2, c2);
+      if (!X.allFinite()) continue;
+      const auto reprojects = [&](const CameraFromWorld& c, const cv::Point2f& px, const cv::KeyPoint& kp) {
+        const Eigen::Vector3d p = c.R * X + c.t;
+        if (!(p.z() > 0)) return false;
+        const Eigen::Vector2d uv = K.project(p);
+        const double sigma = level_scale(scale_factor, kp.octave);
+        const double e2 = (uv.x() - px.x) * (uv.x() - px.x) + (uv.y() - px.y) * (uv.y() - px.y);
+        return e2 / (sigma * sigma) < s.triangulation_chi2;
+      };
+      if (!reprojects(c1, kf1.undistorted_px[static_cast<std::size_t>(i)], kp1) ||
+          !reprojects(c2, kf2.undistorted_px[static_cast<std::size_t>(j)], kp2)) {
+        continue;
+      }
+      const double dist1 = (X - c1.centre).norm(), dist2 = (X - c2.centre).norm();
+      if (!(dist1 > 0 && dist2 > 0)) continue;
+      const double ratio_distance = dist2 / dist1;
+      const double ratio_octave = level_scale(scale_factor, kp1.octave) / level_scale(scale_factor, kp2.octave);
+      const double tolerance = s.triangulation_scale_tolerance * scale_factor;
+      if (ratio_distance * tolerance < ratio_octave || ratio_distance > ratio_octave * tolerance) continue;
+      const std::int64_t id = map.add_map_point(X, kf1.descriptors.row(i), keyframe_id);
+      map.add_observation(id, keyframe_id, i);
+      map.add_observation(id, n, j);
+      report.created.push_back(id);
+    }
   }
   return report;
 }

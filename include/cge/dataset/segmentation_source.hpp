@@ -7,6 +7,9 @@
 //                 PrecomputedMaskReader in strict mode (the simulator writes a PNG per frame)
 //   yolo          a YOLOv8-seg ONNX model (Yolov8Segmenter)
 //   precomputed   a mask folder computed elsewhere (PrecomputedMaskReader)
+// A source named in SegmentationSourceSettings::temporal_filter_sources has its segmenter wrapped
+// in a TemporalInstanceFilter (static objects that a network finds in one frame and misses in the
+// next are passed on only once seen in N of the last M frames; people at once).
 
 #include <filesystem>
 #include <memory>
@@ -15,6 +18,7 @@
 
 #include "cge/segmentation/coco_classes.hpp"
 #include "cge/segmentation/instance_segmenter.hpp"
+#include "cge/segmentation/temporal_instance_filter.hpp"
 #include "cge/segmentation/yolov8_segmenter.hpp"
 
 namespace cge {
@@ -49,6 +53,17 @@ struct SegmentationSourceSettings {
   bool require_every_frame = false;
   /// COCO classes whose instances are marked dynamic, for every source.
   std::set<int> dynamic_class_ids = {kCocoPerson};
+  /// The sources whose segmenter is wrapped in a TemporalInstanceFilter with temporal_filter.
+  /// Default {yolo}: on TUM fr1/rpy with yolov8n-seg-320 the filter cut the keyframes that the
+  /// flicker of static objects added (docs/SEGMENTATION.md, "Flicker of static objects"). Not
+  /// ground_truth: the synthetic error model's missed frames are what that source studies.
+  std::set<SegmentationSource> temporal_filter_sources = {SegmentationSource::yolo};
+  /// N of M and the association of the temporal filter.
+  TemporalInstanceFilterSettings temporal_filter;
+
+  /// Throws std::invalid_argument naming the bad field (the temporal filter's settings, when a
+  /// source is filtered).
+  void validate() const;
 };
 
 /// The segmenter of the `none` source: every frame has no instances.
@@ -68,7 +83,8 @@ class NoSegmenter final : public InstanceSegmenter {
 /// the source's files are missing (ground_truth: <dataset_folder>/segmentation or masks with its
 /// instances.csv; yolo: an empty or missing model path; precomputed: an empty or missing folder),
 /// and passes on the errors of the segmenters' constructors (malformed instances.csv, a file that
-/// is not a YOLOv8-seg model, a class id outside 0 .. 79).
+/// is not a YOLOv8-seg model, a class id outside 0 .. 79) and of settings.validate(). A source in
+/// settings.temporal_filter_sources comes wrapped in a TemporalInstanceFilter.
 std::unique_ptr<InstanceSegmenter> make_segmenter(const SegmentationSourceSettings& settings,
                                                   const std::filesystem::path& dataset_folder);
 

@@ -28,12 +28,22 @@
 namespace cge {
 namespace sim {
 
+/// Most frames a preset makes: 18000, 10 minutes at 30 Hz (TUM's longest RGB-D sequences have a few
+/// thousand). It bounds what grows with the length before the first frame renders (poses, the
+/// people's paths, the loop scenes' ground-truth loops, which grow faster than the length: about
+/// 180 MB at the limit) and keeps the simulated network's false-positive ids, one 16-bit label per
+/// frame after the scene's ids, within range.
+constexpr int kMaxPresetFrames = 18000;
+/// Fastest accepted walking speed, metres per second: a sprinter's (~10 m/s). The people's paths
+/// are made of steps, so their memory grows with speed x duration.
+constexpr double kMaxWalkingSpeedMps = 10;
+
 struct PresetSettings {
   PinholeCamera camera;            ///< TUM fr3 intrinsics, 640 x 480 by default
   RenderSettings render;           ///< lighting and depth-sensor model
   double frame_rate_hz = 30;       ///< as TUM, > 0
   double start_timestamp_s = 0;    ///< timestamp of frame 0, seconds
-  double walking_speed_mps = 1.0;  ///< speed of walking people, metres per second, > 0
+  double walking_speed_mps = 1.0;  ///< speed of walking people, metres per second, in (0, kMaxWalkingSpeedMps]
   /// Walking presets: how long the second person stands still at each of its stops, seconds, >= 0
   /// (long pauses let a person enter a map as static before walking on).
   double pause_s = 1.5;
@@ -46,8 +56,9 @@ struct PresetSettings {
 /// The preset names, in the order of the table above.
 std::vector<std::string> preset_names();
 
-/// A validated sequence of `frames` frames (>= 1). Throws std::invalid_argument for an unknown name
-/// (the message lists the known ones), frames < 1, or invalid settings (e.g. the camera).
+/// A validated sequence of `frames` frames (1 .. kMaxPresetFrames). Throws std::invalid_argument for
+/// an unknown name (the message lists the known ones), frames out of range, or invalid settings
+/// (e.g. the camera).
 SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed, const PresetSettings& settings = {});
 
 }  // namespace sim

@@ -43,9 +43,15 @@
 namespace cge {
 namespace sim {
 
+/// Largest |SegmentationErrorSettings::boundary_offset_px|, pixels. The disc kernel holds
+/// (2r + 1)^2 cells and the morphology's cost grows with r^2 per pixel, so a stray large value
+/// would allocate gigabytes or run for hours; a network's boundary errors are a few pixels, and 100
+/// is an eighth of a 640 x 480 image's diagonal.
+constexpr int kMaxBoundaryOffsetPx = 100;
+
 struct SegmentationErrorSettings {
-  /// Pixels the boundary of each affected mask moves: > 0 dilates, < 0 erodes, 0 keeps it.
-  /// Default -2: a network that misses the outermost pixels of a person.
+  /// Pixels the boundary of each affected mask moves: > 0 dilates, < 0 erodes, 0 keeps it; at most
+  /// kMaxBoundaryOffsetPx either way. Default -2: a network that misses the outermost pixels of a person.
   int boundary_offset_px = -2;
   /// Probability (per affected instance and frame) that the feet are lost, in [0, 1].
   double feet_loss_probability = 0.2;

@@ -54,13 +54,15 @@ class Map final : public KeyframeDatabaseView {
   std::vector<int> covisible_keyframes(int id, int max_count) const override;
 
   // ---- building ---------------------------------------------------------------------------------
-  /// Adds a keyframe, assigning its id (returned) and checking that its per-keypoint vectors agree.
+  /// Adds a keyframe, assigning its id (returned) and checking that its per-keypoint vectors agree
+  /// and that its descriptors are 32-byte CV_8UC1 rows (ORB).
   /// Its map_point_ids must be all -1 (observations are added with add_observation); they are
   /// resized to the keypoint count when empty. undistorted_px, when empty, is filled from the
   /// keypoints' positions (a camera without distortion). It must not be culled (its parent and
   /// T_parent_camera are reset). Throws std::invalid_argument otherwise.
   int add_keyframe(Keyframe keyframe);
-  /// A new map point (without observations); returns its id. `created_by_keyframe` is -1 or an
+  /// A new map point (without observations); returns its id. The descriptor must be one 32-byte
+  /// CV_8UC1 row (ORB), as the matching reads it. `created_by_keyframe` is -1 or an
   /// existing keyframe (the one whose insertion made it: the age used by map-point culling).
   std::int64_t add_map_point(const Eigen::Vector3d& position_world, const cv::Mat& descriptor,
                              int created_by_keyframe = -1);
@@ -128,7 +130,7 @@ class Map final : public KeyframeDatabaseView {
 
   std::vector<Keyframe> keyframes_;
   std::vector<MapPoint> points_;
-  std::vector<std::map<int, int>> covisibility_;  // per keyframe: other keyframe id -> shared points (> 0)
+  std::vector<std::map<int, int>> covisibility_;   // per keyframe: other keyframe id -> shared points (> 0)
   std::vector<std::vector<int>> culled_children_;  // per keyframe: culled keyframes whose parent it is
   int culled_keyframes_ = 0;
   std::int64_t bad_points_ = 0;

@@ -6,7 +6,9 @@
 //   - fuse_map_points: duplicates of one physical point in the new keyframe and its neighbours are
 //     merged, and missing observations added (SearchInNeighbors + ORBmatcher::Fuse);
 //   - cull_redundant_keyframes: a keyframe whose close points are nearly all seen by three other
-//     keyframes at the same or a finer scale is culled (KeyFrameCulling).
+//     keyframes at the same or a finer scale is culled (KeyFrameCulling);
+//   - triangulate_new_points: points for keypoints without depth, from two keyframes' views
+//     (CreateNewMapPoints).
 // Every geometric step uses the keyframes' undistorted_px and T_world_camera; a keypoint "has depth"
 // when its points_camera_m entry has a finite z > 0. Only static keypoints (FeatureLabel) are matched.
 #include <cstdint>
@@ -50,11 +52,33 @@ struct MapMaintenanceSettings {
   /// Only points whose keypoint depth is in (0, close_depth_m] count, metres. ORB-SLAM2: ThDepth = 40
   /// baselines of bf = 40 px m, i.e. 40 * 40 / fx = 2.99 m for TUM fr3 (fx 535.4), 3.09 m for fr1.
   double close_depth_m = 3.0;
-  int redundant_min_observers = 3;  ///< other keyframes that must see a point for it to be redundant (ORB-SLAM2 thObs: 3)
+  /// Other keyframes that must see a point for it to be redundant, count (ORB-SLAM2 thObs: 3).
+  int redundant_min_observers = 3;
   /// Those observers must see it at octave <= the keyframe's octave + this (ORB-SLAM2: 1).
   int redundant_octave_tolerance = 1;
   /// Culled when more than this fraction of its counted points are redundant (ORB-SLAM2: 0.9).
   double redundant_fraction = 0.9;
+
+  // ---- triangulation (LocalMapping.cc CreateNewMapPoints, ORBmatcher.cc SearchForTriangulation) ----
+  int triangulation_neighbours = 10;   ///< most covisible keyframes paired with the new one (ORB-SLAM2 nn: 10)
+  int triangulation_max_hamming = 50;  ///< bits (ORBmatcher TH_LOW: 50)
+  /// Best distance < ratio * second best among the candidates on the epipolar line (ORB-SLAM2 builds
+  /// this matcher with nnratio 0.6; its search restricts candidates by vocabulary node instead).
+  double triangulation_ratio = 0.6;
+  /// Distance to the epipolar line: squared / sigma^2 of the second keypoint under this, chi2 1 dof
+  /// 95% (ORBmatcher::CheckDistEpipolarLine: 3.84).
+  double triangulation_epipolar_chi2 = 3.84;
+  /// A keypoint within this times scale_factor^octave pixels of the epipole is skipped, pixels
+  /// (SearchForTriangulation: squared distance < 100 * scale factor of the level).
+  double triangulation_epipole_px = 10.0;
+  double triangulation_chi2 = 5.991;  ///< reprojection in both views, chi2 2 dof 95% (CreateNewMapPoints: 5.991)
+  /// Rays closer than this cosine give no point: too little parallax (CreateNewMapPoints: 0.9998).
+  double triangulation_max_parallax_cos = 0.9998;
+  /// Distance ratio vs octave ratio tolerance, times scale_factor (CreateNewMapPoints ratioFactor: 1.5).
+  double triangulation_scale_tolerance = 1.5;
+  /// A neighbour whose baseline is under this fraction of its median point depth is skipped
+  /// (CreateNewMapPoints, monocular case: 0.01).
+  double triangulation_min_baseline_ratio = 0.01;
 
   void validate() const;
 };
@@ -65,12 +89,12 @@ int weighted_observations(const Map& map, const MapPoint& point);
 
 /// What cull_recent_map_points did.
 struct MapPointCullingReport {
-  int checked = 0;                  ///< entries of the recent list examined
-  int dropped_bad = 0;              ///< already bad: left the list
-  int erased_low_found_ratio = 0;   ///< found / visible < min_found_ratio
-  int erased_few_observations = 0;  ///< old enough, too few weighted observations
-  int matured = 0;                  ///< old enough and kept: left the list
-  std::vector<std::int64_t> erased; ///< in list order
+  int checked = 0;                   ///< entries of the recent list examined
+  int dropped_bad = 0;               ///< already bad: left the list
+  int erased_low_found_ratio = 0;    ///< found / visible < min_found_ratio
+  int erased_few_observations = 0;   ///< old enough, too few weighted observations
+  int matured = 0;                   ///< old enough and kept: left the list
+  std::vector<std::int64_t> erased;  ///< in list order
 };
 
 /// ORB-SLAM2's MapPointCulling over `recent` (ids of recently created points, in the caller's order),
@@ -85,10 +109,10 @@ MapPointCullingReport cull_recent_map_points(Map& map, std::vector<std::int64_t>
 
 /// What fuse_map_points did.
 struct FusionReport {
-  std::vector<int> targets;     ///< the neighbour keyframes, ascending id
-  int projections = 0;          ///< points projected inside a keyframe's image (both directions)
-  int observations_added = 0;   ///< a point gained a keypoint that saw no point
-  int points_replaced = 0;      ///< duplicates merged by replace_map_point
+  std::vector<int> targets;    ///< the neighbour keyframes, ascending id
+  int projections = 0;         ///< points projected inside a keyframe's image (both directions)
+  int observations_added = 0;  ///< a point gained a keypoint that saw no point
+  int points_replaced = 0;     ///< duplicates merged by replace_map_point
 };
 
 /// ORB-SLAM2's SearchInNeighbors, serial. Targets: the keyframe's fuse_covisible_keyframes most
@@ -120,6 +144,29 @@ struct KeyframeCullingReport {
 /// redundant; with more than redundant_fraction of them redundant, the keyframe is culled with its
 /// most covisible keyframe as parent. Throws std::invalid_argument for an unknown or culled keyframe.
 KeyframeCullingReport cull_redundant_keyframes(Map& map, int keyframe_id, const MapMaintenanceSettings& settings);
+
+/// What triangulate_new_points did.
+struct TriangulationReport {
+  std::vector<int> neighbours;        ///< keyframes paired with the new one, ascending id
+  int matches = 0;                    ///< descriptor matches passing the epipolar and ratio tests
+  std::vector<std::int64_t> created;  ///< new map points, in creation order (add them to the recent list)
+};
+
+/// ORB-SLAM2's CreateNewMapPoints for keypoints without depth: between the keyframe and each of its
+/// triangulation_neighbours most covisible keyframes (ascending id; skipped when the baseline is
+/// under triangulation_min_baseline_ratio of the neighbour's median point depth), static keypoints
+/// that observe no point and have no depth are matched by descriptor (nearest within
+/// triangulation_max_hamming among those within the epipolar band and away from the epipole, best <
+/// triangulation_ratio * second best, each neighbour keypoint used once, keyframe keypoints in index
+/// order), triangulated linearly (DLT) and kept when in front of both cameras, with enough parallax
+/// (cosine < triangulation_max_parallax_cos), a reprojection chi2 < triangulation_chi2 in both views
+/// and distances consistent with the octaves. Each new point (descriptor of the keyframe's keypoint,
+/// created_by_keyframe = keyframe_id) is observed by both keypoints. Deviation from ORB-SLAM2: it
+/// matches within vocabulary nodes; this searches all candidates of the neighbour with the ratio test
+/// (no vocabulary needed). Throws std::invalid_argument for an unknown or culled keyframe or
+/// orb_scale_factor < 1.
+TriangulationReport triangulate_new_points(Map& map, int keyframe_id, const PinholeIntrinsics<double>& intrinsics,
+                                           double orb_scale_factor, const MapMaintenanceSettings& settings);
 
 }  // namespace slam
 }  // namespace cge
