@@ -103,7 +103,8 @@ struct Options {
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   int keyframe_interval = cge::PatchKeyframeSettings<double>{}.interval_frames;  // mode YMK: k
   int orb_spread = cge::slam::OrbSettings{}.spread_oversampling;
-  int keyframe_min_gap = cge::OrbSlam2KeyframeSettings<double>{}.min_frame_gap;
+  std::string map_maintenance = "all";
+  int keyframe_min_gap = cge::slam::SystemSettings{}.orbslam2_keyframes.min_frame_gap;
   std::string loop_correction = "pgo+ba";                                        // none | pgo | pgo+ba
   // Depth term of the tracking refinement (0: pixels only) and local BA (on | off).
   double tracking_depth_sigma = cge::slam::TrackerSettings{}.refinement_depth_sigma_per_m;
@@ -457,6 +458,25 @@ int run(Options opt) {
   settings.mapping.reference_min_observations = opt.reference_min_observations;
   settings.patch_keyframes.interval_frames = opt.keyframe_interval;
   settings.frame.orb.spread_oversampling = opt.orb_spread;
+  {
+    cge::slam::LocalMappingSettings& lm = settings.local_mapping;
+    const std::string& m = opt.map_maintenance;
+    if (m != "all") {
+      std::set<std::string> rules;
+      std::stringstream list(m == "none" ? "" : m);
+      for (std::string rule; std::getline(list, rule, ',');) {
+        if (rule != "cull_points" && rule != "triangulate" && rule != "fuse" && rule != "cull_keyframes") {
+          throw UsageError("--map-maintenance: unknown rule '" + rule +
+                           "' (expected all, none or a comma list of cull_points, triangulate, fuse, cull_keyframes)");
+        }
+        rules.insert(rule);
+      }
+      lm.cull_map_points = rules.count("cull_points") > 0;
+      lm.triangulate_points = rules.count("triangulate") > 0;
+      lm.fuse_map_points = rules.count("fuse") > 0;
+      lm.cull_keyframes = rules.count("cull_keyframes") > 0;
+    }
+  }
   settings.orbslam2_keyframes.min_frame_gap = opt.keyframe_min_gap;
   settings.keep_keyframe_images = opt.map;
   settings.loop_correction.enabled = opt.loop_correction != "none";
@@ -752,6 +772,9 @@ int main(int argc, char** argv) {
                  "modes none, Y, YM: frames after a keyframe before the ORB-SLAM2 policy's ratio rule may insert "
                  "the next (stands in for the time ORB-SLAM2's local-mapping thread is busy)")
       ->check(CLI::Range(0, 1000));
+  app.add_option("--map-maintenance", opt.map_maintenance,
+                 "map maintenance after each keyframe: 'all', 'none' or a comma list of cull_points, triangulate, "
+                 "fuse, cull_keyframes");
   app.add_option("--orb-spread", opt.orb_spread,
                  "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")
       ->check(CLI::Range(1, 8));

@@ -107,7 +107,7 @@ TEST_CASE("Real fr1/rpy: keypoints are undistorted as OpenCV and the forward mod
     const Eigen::Vector2d back = d.distort({(u.x - k.cx_px) / k.fx_px, (u.y - k.cy_px) / k.fy_px});
     CHECK(std::abs(back.x() * k.fx_px + k.cx_px - detected[i].x) < 1e-3);
     CHECK(std::abs(back.y() * k.fy_px + k.cy_px - detected[i].y) < 1e-3);
-    largest_move = std::max(largest_move, std::hypot(u.x - detected[i].x, u.y - detected[i].y));
+    largest_move = std::max(largest_move, static_cast<double>(std::hypot(u.x - detected[i].x, u.y - detected[i].y)));
     // The point from depth lies on the undistorted ray.
     const Eigen::Vector3d& p = frame.points_camera_m[i];
     if (std::isfinite(p.z())) {

@@ -314,6 +314,10 @@ void System::local_mapping(int keyframe_id) {
   maintenance.close_depth_m = settings_.frame.close_depth_m;
   const double scale = settings_.frame.orb.scale_factor;
   if (lm.cull_map_points) cull_recent_map_points(map_, recent_points_, keyframe_id, maintenance);
+  if (lm.triangulate_points) {
+    const TriangulationReport made = triangulate_new_points(map_, keyframe_id, intrinsics_, scale, maintenance);
+    recent_points_.insert(recent_points_.end(), made.created.begin(), made.created.end());
+  }
   if (lm.fuse_map_points) fuse_map_points(map_, keyframe_id, intrinsics_, image_size_, scale, maintenance);
   if (lm.bundle_adjustment) local_bundle_adjustment(map_, keyframe_id, intrinsics_, lm, scale);
   if (lm.cull_keyframes) {

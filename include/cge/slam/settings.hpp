@@ -170,6 +170,10 @@ struct LocalMappingSettings {
   // Map maintenance after each keyframe, in ORB-SLAM2's order (LocalMapping::Run): recent points
   // culled, new points triangulated, duplicates fused, local BA, redundant keyframes culled.
   bool cull_map_points = true;      ///< cull_recent_map_points (cge/slam/map_maintenance.hpp)
+  /// triangulate_new_points for keypoints without usable depth. Off by default: on the real fr1/rpy
+  /// slice it gave no gain in mode YMK (2.68 vs 2.74 cm) and, with keyframe culling, sent mode none
+  /// from 2.5 to 12 cm (docs/REAL_DATA.md); RGB-D keypoints mostly have depth.
+  bool triangulate_points = false;
   bool fuse_map_points = true;      ///< fuse_map_points among covisible keyframes
   bool cull_keyframes = true;       ///< cull_redundant_keyframes (its close_depth_m follows FrameSettings)
   MapMaintenanceSettings maintenance;
@@ -224,7 +228,14 @@ struct SystemSettings {
   LocalMappingSettings local_mapping;
   LoopCorrectionSettings loop_correction;
   PatchKeyframeSettings<double> patch_keyframes;        ///< mode YMK
-  OrbSlam2KeyframeSettings<double> orbslam2_keyframes;  ///< modes none, Y, YM
+  /// Modes none, Y, YM. min_frame_gap 5 stands in for the time ORB-SLAM2's local-mapping thread is
+  /// busy after a keyframe (c1b needs it idle; about 0.17 s at 30 fps): with 0 the serial pipeline
+  /// kept 151 keyframes on the real fr1/rpy slice where ORB-SLAM2 keeps 39-43 (docs/REAL_DATA.md).
+  OrbSlam2KeyframeSettings<double> orbslam2_keyframes = [] {
+    OrbSlam2KeyframeSettings<double> k;
+    k.min_frame_gap = 5;
+    return k;
+  }();
   std::uint64_t seed = 0;             ///< the MAD filter's samples: frame i uses a seed derived from (seed, i)
   bool keep_keyframe_images = false;  ///< keep bgr/depth in keyframes (for the dense maps of issue 6)
 
