@@ -154,6 +154,21 @@ TEST_CASE("TemporalInstanceFilter: the track is forgotten after M frames without
   }
 }
 
+TEST_CASE("TemporalInstanceFilter: a frame of another size forgets the tracks", "[segmentation][temporal_filter]") {
+  const SegmentedInstance chair = rect_instance(kChair, cv::Rect(5, 5, 10, 10));
+  TemporalInstanceFilter filter(std::make_unique<ScriptedSegmenter>(std::vector<std::vector<SegmentedInstance>>{
+                                    {chair}, {chair}, {}, {}}),
+                                n_of_m(2, 3));
+  const cv::Mat image(kImage, CV_8UC3, cv::Scalar::all(0));
+  CHECK(filter.segment({image, "0"}).empty());
+  CHECK(filter.segment({image, "1"}).size() == 1);
+  CHECK(filter.segment({image, "2"}).size() == 1);  // held
+  CHECK(filter.track_count() == 1);
+  const cv::Mat other(kImage.height + 1, kImage.width, CV_8UC3, cv::Scalar::all(0));
+  CHECK(filter.segment({other, "3"}).empty());  // no mask of the old size is held into it
+  CHECK(filter.track_count() == 0);
+}
+
 TEST_CASE("TemporalInstanceFilter: two instances of one class keep their identities",
           "[segmentation][temporal_filter]") {
   // Two chairs side by side moving right; the left one is missed in frame 2, the right one in 3.
