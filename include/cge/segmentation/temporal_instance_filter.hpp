@@ -229,14 +229,13 @@ class TemporalInstanceFilter final : public InstanceSegmenter {
 
  private:
   struct Track {
-    SegmentedInstance last;      ///< its last detection
-    int area = 0;                ///< pixels set in last.mask (mask overlap only)
-    std::uint64_t history = 0;   ///< bit i: detected i frames ago (bit 0: the current frame)
+    SegmentedInstance last;     ///< its last detection
+    int area = 0;               ///< pixels set in last.mask (mask overlap only)
+    std::uint64_t history = 0;  ///< bit i: detected i frames ago (bit 0: the current frame)
   };
 
   std::uint64_t window_bits() const {
-    return settings_.window_frames == 64 ? ~std::uint64_t{0}
-                                         : (std::uint64_t{1} << settings_.window_frames) - 1;
+    return settings_.window_frames == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << settings_.window_frames) - 1;
   }
   int seen(const Track& t) const {
     std::uint64_t bits = t.history & window_bits();
