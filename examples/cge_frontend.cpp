@@ -355,10 +355,18 @@ int run(const Options& opt) {
       throw UsageError("--out-image: '" + opt.out_image +
                        "' exists; refusing to overwrite it (add --force to replace it)");
     }
-    if (!cv::imwrite(opt.out_image, picture)) {
+    // Missing folders on the way are created (docs/CLI.md); the picture replaces the file whole.
+    cge_tool::CreatedFolders folders;
+    folders.create_parent_of(opt.out_image, "--out-image");
+    try {
+      cge_tool::replace_file(opt.out_image, [&picture](const fs::path& temporary) {
+        return cv::imwrite(temporary.string(), picture);
+      });
+    } catch (const std::runtime_error&) {
       std::fprintf(stderr, "%s: error: --out-image: cannot write '%s'\n", kProgram, opt.out_image.c_str());
       return kExitFailure;
     }
+    folders.keep();
   }
   const double total_ms = elapsed_ms(start);
 

@@ -1,5 +1,6 @@
 #include "cge/dataset/orbslam2_settings.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -107,6 +108,11 @@ class KeyReader {
 
 }  // namespace
 
+bool coarsest_level_fits(const OrbExtractorSettings& orb, int width_px, int height_px) {
+  const double smaller_side = std::min(width_px, height_px);
+  return orb.levels >= 1 && smaller_side / std::pow(orb.scale_factor, orb.levels - 1) >= 1.0;
+}
+
 cv::Mat LensDistortion::coefficients() const { return (cv::Mat_<double>(1, 5) << k1, k2, p1, p2, k3); }
 
 cv::Mat OrbSlam2Settings::camera_matrix() const {
@@ -159,11 +165,18 @@ OrbSlam2Settings read_orbslam2_settings(const fs::path& file) {
 
   OrbExtractorSettings& o = s.orb;
   o.features = r.integer("ORBextractor.nFeatures", kOptional).value_or(o.features);
-  r.require(o.features >= 1, "ORBextractor.nFeatures", o.features, ">= 1");
+  r.require(o.features >= 1 && o.features <= kMaxOrbFeatures, "ORBextractor.nFeatures", o.features,
+            ("1 .. " + std::to_string(kMaxOrbFeatures)).c_str());
   o.scale_factor = r.real("ORBextractor.scaleFactor", kOptional).value_or(o.scale_factor);
   r.require(o.scale_factor > 1, "ORBextractor.scaleFactor", o.scale_factor, "> 1");
   o.levels = r.integer("ORBextractor.nLevels", kOptional).value_or(o.levels);
-  r.require(o.levels >= 1, "ORBextractor.nLevels", o.levels, ">= 1");
+  r.require(o.levels >= 1 && o.levels <= kMaxOrbLevels, "ORBextractor.nLevels", o.levels,
+            ("1 .. " + std::to_string(kMaxOrbLevels)).c_str());
+  if (s.width_px > 0) {
+    r.require(coarsest_level_fits(o, s.width_px, s.height_px), "ORBextractor.nLevels", o.levels,
+              "the coarsest level of a Camera.width x Camera.height image keeps no pixel: scaleFactor^(nLevels - 1) "
+              "must not exceed the smaller side");
+  }
   o.initial_fast_threshold = r.integer("ORBextractor.iniThFAST", kOptional).value_or(o.initial_fast_threshold);
   r.require(o.initial_fast_threshold >= 1 && o.initial_fast_threshold <= kMaxFastThreshold, "ORBextractor.iniThFAST",
             o.initial_fast_threshold, "1 .. 255");
