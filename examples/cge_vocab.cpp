@@ -21,6 +21,7 @@
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "cge/io/stderr_capture.hpp"
 #include "cge/sim/frame_source.hpp"
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
@@ -131,8 +132,12 @@ int run(const Options& opt) {
     for (std::size_t i = 0; i < paths.size() && !full(); i += static_cast<std::size_t>(opt.step)) {
       std::error_code ec;
       if (fs::is_directory(paths[i], ec)) throw std::invalid_argument("the image " + paths[i] + " is a directory");
+      cge::io::StderrCapture decoder_messages;  // libpng's complaints join the message below
       const cv::Mat img = cv::imread(paths[i], cv::IMREAD_COLOR);
-      if (img.empty()) throw std::invalid_argument("cannot read the image " + paths[i]);
+      const std::string said = decoder_messages.finish();
+      if (img.empty()) {
+        throw std::invalid_argument("cannot read the image " + paths[i] + (said.empty() ? "" : " (" + said + ")"));
+      }
       add_image(img);
     }
     source = opt.images_dir.empty() ? opt.list_file : opt.images_dir;
