@@ -106,6 +106,7 @@ struct Options {
   // Temporal instance filter of the network sources: "N/M" (seen in N of the last M frames) or "off".
   std::string temporal_filter = default_temporal_filter();
   std::string temporal_overlap = cge::to_string(cge::TemporalInstanceFilterSettings{}.overlap);
+  std::string depth_estimate = cge::to_string(cge::DepthMADSettings{}.depth_estimate);  // modes YM, YMK
   std::string settings;
   std::string vocabulary;
   std::uint64_t seed = 0;
@@ -502,6 +503,7 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
   j["segmentation"] = opt.segmentation;
   j["temporal_filter"] = opt.segmentation == "yolo" ? opt.temporal_filter : "off";
   if (opt.segmentation == "yolo" && opt.temporal_filter != "off") j["temporal_overlap"] = opt.temporal_overlap;
+  j["depth_estimate"] = cge::to_string(system.settings().frame.mad.depth_estimate);
   j["source"] = source;
   j["seed"] = opt.seed;
   j["loop_settings"] = loop_settings;
@@ -589,6 +591,8 @@ int run(Options opt) {
     throw UsageError(std::string("--mode: ") + e.what());
   }
   settings.seed = opt.seed;
+  settings.frame.mad.depth_estimate =
+      opt.depth_estimate == "mask_pixels" ? cge::DepthEstimate::mask_pixels : cge::DepthEstimate::box_samples;
   settings.mapping.reference_min_observations = opt.reference_min_observations;
   settings.patch_keyframes.interval_frames = opt.keyframe_interval;
   settings.keep_keyframe_images = opt.map;
@@ -843,6 +847,11 @@ int main(int argc, char** argv) {
   app.add_option("--temporal-filter", opt.temporal_filter,
                  "--segmentation yolo: pass a static object's instance on once detected in N of the last M frames "
                  "(N/M), people at once; off: every detection as the network gives it (docs/SEGMENTATION.md)")
+      ->capture_default_str();
+  app.add_option("--depth-estimate", opt.depth_estimate,
+                 "modes YM, YMK: where a person's depth mean and MAD come from: box_samples (n random samples in the "
+                 "box, the paper's) or mask_pixels (every mask pixel with depth; docs/SEGMENTATION.md)")
+      ->check(CLI::IsMember({"box_samples", "mask_pixels"}))
       ->capture_default_str();
   app.add_option("--temporal-overlap", opt.temporal_overlap,
                  "what the temporal filter's association compares between frames: box or mask IoU")
