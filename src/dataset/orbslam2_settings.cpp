@@ -28,6 +28,7 @@ class KeyReader {
     std::ifstream in(file, std::ios::binary);
     if (!in) throw std::invalid_argument("cannot open the settings file '" + file_ + "'");
     for (std::string line; std::getline(in, line);) lines_.push_back(line);
+    check_single_document();
     try {
       storage_.open(file_, cv::FileStorage::READ);
     } catch (const cv::Exception& e) {
@@ -38,6 +39,29 @@ class KeyReader {
       throw std::invalid_argument(
           "the settings file '" + file_ +
           "' is not a YAML map cv::FileStorage can read (ORB-SLAM2 files start with %YAML:1.0)");
+    }
+  }
+
+  /// A settings file is one YAML document: at most one "---" line, before any key, and no other
+  /// line starting with "---" or "...". cv::FileStorage's parser can loop for ever on further
+  /// document markers (found by fuzzing, OpenCV 4.6), so they are refused here, with their line.
+  void check_single_document() const {
+    bool marker_seen = false, key_seen = false;
+    for (std::size_t i = 0; i < lines_.size(); ++i) {
+      std::string l = lines_[i];
+      if (!l.empty() && l.back() == '\r') l.pop_back();
+      const std::string at = file_ + ":" + std::to_string(i + 1) + ": ";
+      if (l.compare(0, 3, "---") == 0 || l.compare(0, 3, "...") == 0) {
+        const bool plain = l.find_first_not_of(" \t", 3) == std::string::npos && l[0] == '-';
+        if (!plain || marker_seen || key_seen) {
+          throw std::invalid_argument(at + "'" + l + "': a settings file holds one YAML document (one '---' line, "
+                                      "after %YAML:1.0 and before the keys)");
+        }
+        marker_seen = true;
+        continue;
+      }
+      const std::size_t first = l.find_first_not_of(" \t");
+      if (first != std::string::npos && l[first] != '#' && l[first] != '%') key_seen = true;
     }
   }
 
