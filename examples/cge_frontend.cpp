@@ -42,6 +42,7 @@
 #include "cge/segmentation/precomputed_mask_reader.hpp"
 #include "cge/segmentation/yolov8_segmenter.hpp"
 
+#include "cge/io/stderr_capture.hpp"
 #include "tool_support.hpp"
 
 #ifndef CGE_VERSION_STRING
@@ -161,17 +162,26 @@ void check_options(const Options& opt) {
   }
 }
 
+/// cv::imread with the decoders' own complaints (libpng's "Read Error") kept off standard error:
+/// they join the tool's message instead of preceding it.
+cv::Mat read_image(const std::string& flag, const std::string& path, int flags) {
+  cge::io::StderrCapture decoder_messages;
+  const cv::Mat image = cv::imread(path, flags);
+  const std::string said = decoder_messages.finish();
+  if (image.empty()) {
+    throw UsageError(flag + ": cannot read '" + path + "' as an image" + (said.empty() ? "" : " (" + said + ")"));
+  }
+  return image;
+}
+
 cv::Mat load_rgb(const std::string& path) {
   require_file("--rgb", path);
-  const cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
-  if (image.empty()) throw UsageError("--rgb: cannot read '" + path + "' as an image");
-  return image;
+  return read_image("--rgb", path, cv::IMREAD_COLOR);
 }
 
 cv::Mat load_depth(const std::string& path, cv::Size image_size, const std::string& rgb_path) {
   require_file("--depth", path);
-  const cv::Mat depth = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (depth.empty()) throw UsageError("--depth: cannot read '" + path + "' as an image");
+  const cv::Mat depth = read_image("--depth", path, cv::IMREAD_UNCHANGED);
   if (depth.type() != CV_16UC1) {
     throw UsageError("--depth: '" + path + "' is " + cv::typeToString(depth.type()) +
                      ", expected a single-channel 16-bit image (CV_16UC1, e.g. a TUM depth PNG)");
@@ -355,10 +365,18 @@ int run(const Options& opt) {
       throw UsageError("--out-image: '" + opt.out_image +
                        "' exists; refusing to overwrite it (add --force to replace it)");
     }
-    if (!cv::imwrite(opt.out_image, picture)) {
+    // Missing folders on the way are created (docs/CLI.md); the picture replaces the file whole.
+    cge_tool::CreatedFolders folders;
+    folders.create_parent_of(opt.out_image, "--out-image");
+    try {
+      cge_tool::replace_file(opt.out_image, [&picture](const fs::path& temporary) {
+        return cv::imwrite(temporary.string(), picture);
+      });
+    } catch (const std::runtime_error&) {
       std::fprintf(stderr, "%s: error: --out-image: cannot write '%s'\n", kProgram, opt.out_image.c_str());
       return kExitFailure;
     }
+    folders.keep();
   }
   const double total_ms = elapsed_ms(start);
 

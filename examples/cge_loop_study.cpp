@@ -406,7 +406,9 @@ int main(int argc, char** argv) {
                  "a frame is collapsed when |I - log2|V|| = H <= this many bits (1: perplexity <= 2)")
       ->capture_default_str();
   app.add_option("--mode", opt.mode, "dynamic labelling as cge_slam: none, Y, YM, YMK")->capture_default_str();
-  app.add_option("--seed", opt.seed, "seed of the MAD samples (as cge_slam --seed)")->capture_default_str();
+  app.add_option("--seed", opt.seed, "seed of the MAD samples (as cge_slam --seed)")
+      ->check(cge_tool::seed_check())
+      ->capture_default_str();
   if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
   return cge_tool::run_reporting_errors(kProgram, &progress_bar, [&] { return run(opt); });
 }

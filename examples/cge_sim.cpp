@@ -208,7 +208,9 @@ int main(int argc, char** argv) {
   app.add_option("--frames", opt.frames,
                  "number of frames, 1 .. " + std::to_string(cge::sim::kMaxPresetFrames))
       ->required();
-  app.add_option("--seed", opt.seed, "seed of the scene and of the segmentation errors")->capture_default_str();
+  app.add_option("--seed", opt.seed, "seed of the scene and of the segmentation errors")
+      ->check(cge_tool::seed_check())
+      ->capture_default_str();
   app.add_option("--out", opt.out, "output folder; must not exist or be empty, unless --force")->required();
   app.add_flag("--force", opt.writer.force,
                "write into a non-empty folder: overwrite the sequence's own files, delete nothing");

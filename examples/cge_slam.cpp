@@ -14,8 +14,12 @@
 // measurements and differ from run to run.
 //
 // Output folder: refused when not empty unless --force; with --force only the files above are
-// replaced, nothing else is touched. Files are written into a hidden folder inside --out and
-// renamed into place only when the run succeeded, so a failed run leaves --out as it was.
+// replaced, nothing else is touched. Files are written into a hidden staging folder inside --out
+// (.cge_slam.partial.<pid>) and renamed into place only when the run succeeded, after every
+// destination was checked, so a failed run leaves --out as it was; so does SIGTERM or SIGINT,
+// whose handler removes the staging folder. Staging folders of processes no longer alive are
+// leftovers of a killed run: they do not make --out "not empty" and are removed. Missing folders
+// on the way to --out are created (docs/CLI.md) and removed again when the run fails.
 // Standard error: diagnostics and, on a terminal only, a progress bar.
 // Exit codes: 0 success; 1 failure while running (a file that cannot be written); 2 bad usage or
 // bad input (missing dataset, malformed list file, unreadable image, sizes that differ, ...).
@@ -29,12 +33,19 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <csignal>
+#include <cerrno>
+#include <cstring>
+
+#include <signal.h>
+#include <sys/types.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -96,10 +107,12 @@ struct Options {
   // Temporal instance filter of the network sources: "N/M" (seen in N of the last M frames) or "off".
   std::string temporal_filter = default_temporal_filter();
   std::string temporal_overlap = cge::to_string(cge::TemporalInstanceFilterSettings{}.overlap);
+  std::string depth_estimate = cge::to_string(cge::DepthMADSettings{}.depth_estimate);  // modes YM, YMK
   std::string settings;
   std::string vocabulary;
   std::uint64_t seed = 0;
-  int frames = 0;  // 0: all (dataset) or kDefaultPresetFrames (rendered)
+  int frames = 0;  // not given: all (dataset) or kDefaultPresetFrames (rendered)
+  bool frames_given = false;
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   int keyframe_interval = cge::PatchKeyframeSettings<double>{}.interval_frames;  // mode YMK: k
   int orb_spread = cge::slam::OrbSettings{}.spread_oversampling;
@@ -171,34 +184,97 @@ void apply_settings_file(const fs::path& file, cge::PinholeIntrinsics<double>& i
 
 // ---- the output folder ---------------------------------------------------------------------------
 
+/// Every file cge_slam may write into --out: each destination is checked before the run.
+const std::vector<std::string>& output_names() {
+  static const std::vector<std::string> names = {"trajectory.txt", "keyframes.txt", "loops.csv",   "frames.csv",
+                                                 "timings.csv",    "summary.json",  "groundtruth.txt", "map.ply",
+                                                 "map.ot",         "map.bt",        "map_top.png"};
+  return names;
+}
+
+/// What the SIGTERM / SIGINT handler removes: the staging folder's possible files, the folder,
+/// and --out when this run created it (rmdir: only when empty). Plain C strings, written before
+/// the handler is installed, so that the handler only calls unlink, rmdir, signal and raise.
+struct SignalCleanup {
+  static constexpr std::size_t kPathBytes = 4096;
+  char staged[16][kPathBytes] = {};
+  int staged_count = 0;
+  char staging[kPathBytes] = {};
+  char created_out[kPathBytes] = {};
+};
+SignalCleanup signal_cleanup;
+volatile std::sig_atomic_t cleanup_armed = 0;
+
+extern "C" void remove_staging_and_die(int signal_number) {
+  if (cleanup_armed != 0) {
+    for (int i = 0; i < signal_cleanup.staged_count; ++i) ::unlink(signal_cleanup.staged[i]);
+    ::rmdir(signal_cleanup.staging);
+    if (signal_cleanup.created_out[0] != '\0') ::rmdir(signal_cleanup.created_out);
+  }
+  std::signal(signal_number, SIG_DFL);
+  std::raise(signal_number);
+}
+
+bool copy_path(char* to, const fs::path& from) {
+  const std::string text = from.string();
+  if (text.size() + 1 > SignalCleanup::kPathBytes) return false;
+  std::memcpy(to, text.c_str(), text.size() + 1);
+  return true;
+}
+
+/// A staging folder ".cge_slam.partial.<pid>" whose process is gone (a killed run's leftover).
+bool is_stale_staging(const fs::path& entry) {
+  const std::string name = entry.filename().string();
+  const std::string prefix = ".cge_slam.partial.";
+  if (name.compare(0, prefix.size(), prefix) != 0 || name.size() == prefix.size()) return false;
+  const std::string digits = name.substr(prefix.size());
+  if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) return false;
+  const long pid = std::stol(digits);
+  if (pid == static_cast<long>(::getpid())) return false;
+  return ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+}
+
 /// Writes files into a hidden staging folder inside `out` and moves them into `out` on commit();
 /// without commit() (a failure) the staging folder is removed and `out` is as it was.
 class OutputFolder {
  public:
   OutputFolder(const fs::path& out, bool force) : out_(out) {
     std::error_code ec;
+    std::vector<fs::path> stale;
     if (fs::exists(out_, ec)) {
       if (!fs::is_directory(out_, ec)) throw UsageError("'" + out_.string() + "' exists and is not a folder");
-      if (!fs::is_empty(out_, ec) && !force) {
+      bool other_entries = false;
+      for (const auto& entry : fs::directory_iterator(out_, ec)) {
+        if (is_stale_staging(entry.path())) {
+          stale.push_back(entry.path());
+        } else {
+          other_entries = true;
+        }
+      }
+      if (other_entries && !force) {
         throw UsageError("'" + out_.string() +
                          "' exists and is not empty (use --force to replace cge_slam's files in it)");
       }
+      // Replacing must not fail half-way: every destination must be a file or free.
+      for (const std::string& name : output_names()) check_destination(name);
     } else {
-      fs::create_directories(out_, ec);
-      if (ec) throw std::runtime_error("cannot create '" + out_.string() + "': " + ec.message());
+      folders_.create(out_, "--out");
       created_out_ = true;
     }
+    for (const fs::path& p : stale) fs::remove_all(p, ec);  // a killed run's files, never the user's
     staging_ = out_ / (".cge_slam.partial." + std::to_string(::getpid()));
     fs::create_directory(staging_, ec);
     if (ec) throw std::runtime_error("cannot create '" + staging_.string() + "': " + ec.message());
+    arm_signal_cleanup();
   }
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;
   ~OutputFolder() {
+    cleanup_armed = 0;
     if (committed_) return;
     std::error_code ec;
     fs::remove_all(staging_, ec);  // our own folder, holding only our files
-    if (created_out_ && fs::is_empty(out_, ec)) fs::remove(out_, ec);
+    // folders_ (destroyed after this body) removes the folders this run created, when empty.
   }
 
   template <typename Writer>
@@ -219,18 +295,48 @@ class OutputFolder {
     return staging_ / name;
   }
 
+  /// Moves the files into `out`: every destination is checked first (it may have changed during
+  /// the run), so that the renames do not stop half-way over a user's folder.
   void commit() {
+    for (const std::string& name : names_) check_destination(name);
     for (const std::string& name : names_) {
       std::error_code ec;
       fs::rename(staging_ / name, out_ / name, ec);
       if (ec) throw std::runtime_error("cannot move " + name + " into '" + out_.string() + "': " + ec.message());
     }
+    cleanup_armed = 0;
     std::error_code ec;
     fs::remove(staging_, ec);
     committed_ = true;
+    folders_.keep();
   }
 
  private:
+  void check_destination(const std::string& name) const {
+    std::error_code ec;
+    const fs::file_status st = fs::symlink_status(out_ / name, ec);
+    if (fs::exists(st) && !fs::is_regular_file(st)) {
+      throw UsageError("'" + (out_ / name).string() + "' exists and is not a file: cge_slam cannot replace it");
+    }
+  }
+
+  void arm_signal_cleanup() {
+    SignalCleanup& c = signal_cleanup;
+    bool fits = copy_path(c.staging, staging_);
+    c.staged_count = 0;
+    for (const std::string& name : output_names()) fits = fits && copy_path(c.staged[c.staged_count++], staging_ / name);
+    c.created_out[0] = '\0';
+    if (created_out_) fits = fits && copy_path(c.created_out, out_);
+    if (!fits) return;  // a path longer than the buffers: no cleanup on signals
+    cleanup_armed = 1;
+    struct sigaction action {};
+    action.sa_handler = remove_staging_and_die;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(SIGTERM, &action, nullptr);
+    ::sigaction(SIGINT, &action, nullptr);
+  }
+
+  cge_tool::CreatedFolders folders_;  // first member: destroyed last, after the staging folder
   fs::path out_, staging_;
   std::vector<std::string> names_;
   bool created_out_ = false;
@@ -392,6 +498,7 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
   j["segmentation"] = opt.segmentation;
   j["temporal_filter"] = opt.segmentation == "yolo" ? opt.temporal_filter : "off";
   if (opt.segmentation == "yolo" && opt.temporal_filter != "off") j["temporal_overlap"] = opt.temporal_overlap;
+  j["depth_estimate"] = cge::to_string(system.settings().frame.mad.depth_estimate);
   j["source"] = source;
   j["seed"] = opt.seed;
   j["loop_settings"] = loop_settings;
@@ -447,6 +554,30 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
 
 // ---- the run ---------------------------------------------------------------------------------------
 
+/// Compares the first image with the settings file (Camera.width x Camera.height) and with the ORB
+/// pyramid; UsageError naming the file and key.
+void check_first_image(const cv::Size& image, const std::optional<fs::path>& settings_file,
+                       const cge::slam::OrbSettings& orb) {
+  const std::string size = std::to_string(image.width) + " x " + std::to_string(image.height);
+  std::string where = "the settings";
+  if (settings_file) {
+    where = settings_file->string();
+    const cge::dataset::OrbSlam2Settings file = cge::dataset::read_orbslam2_settings(*settings_file);
+    if (file.width_px > 0 && (file.width_px != image.width || file.height_px != image.height)) {
+      throw UsageError(where + ": Camera.width x Camera.height is " + std::to_string(file.width_px) + " x " +
+                       std::to_string(file.height_px) + ", but the images are " + size);
+    }
+  }
+  cge::dataset::OrbExtractorSettings pyramid;
+  pyramid.levels = orb.levels;
+  pyramid.scale_factor = orb.scale_factor;
+  if (!cge::dataset::coarsest_level_fits(pyramid, image.width, image.height)) {
+    throw UsageError(where + ": ORBextractor.nLevels " + std::to_string(orb.levels) +
+                     " is too many for " + size + " images at scaleFactor " + short_number(orb.scale_factor) +
+                     " (the coarsest level keeps no pixel)");
+  }
+}
+
 int run(Options opt) {
   cge::slam::SystemSettings settings;
   try {
@@ -455,6 +586,8 @@ int run(Options opt) {
     throw UsageError(std::string("--mode: ") + e.what());
   }
   settings.seed = opt.seed;
+  settings.frame.mad.depth_estimate =
+      opt.depth_estimate == "mask_pixels" ? cge::DepthEstimate::mask_pixels : cge::DepthEstimate::box_samples;
   settings.mapping.reference_min_observations = opt.reference_min_observations;
   settings.patch_keyframes.interval_frames = opt.keyframe_interval;
   settings.frame.orb.spread_oversampling = opt.orb_spread;
@@ -485,7 +618,19 @@ int run(Options opt) {
   settings.local_mapping.fixed_keyframes = opt.local_ba_fixed;
   settings.tracker.refinement_depth_sigma_per_m = opt.tracking_depth_sigma;
   settings.loop_correction.bundle_adjustment = opt.loop_correction == "pgo+ba";
-  if (opt.frames < 0) throw UsageError("--frames must not be negative, got " + std::to_string(opt.frames));
+  if (opt.frames_given && opt.frames < 1) {
+    throw UsageError("--frames must be at least 1, got " + std::to_string(opt.frames) + " (omit it for every frame)");
+  }
+  if (opt.dataset.empty() && opt.frames_given) {
+    cge_tool::require_at_most("--frames", opt.frames, cge::sim::kMaxPresetFrames, "rendered: 10 minutes at 30 Hz");
+  }
+  // Options that only one source reads: say so instead of ignoring them in silence.
+  if (!opt.model.empty() && opt.segmentation != "yolo") {
+    std::fprintf(stderr, "%s: warning: --model is used only with --segmentation yolo; ignored\n", kProgram);
+  }
+  if (!opt.masks.empty() && opt.segmentation != "precomputed") {
+    std::fprintf(stderr, "%s: warning: --masks is used only with --segmentation precomputed; ignored\n", kProgram);
+  }
   if (opt.out.empty()) throw UsageError("--out must name a folder");
   if (opt.segmentation.empty())
     opt.segmentation = settings.mode == cge::slam::DynamicMode::none ? "none" : "ground_truth";
@@ -598,6 +743,12 @@ int run(Options opt) {
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("settings: ") + e.what());
   }
+  // The images against the settings, before any work: the file's Camera.width and .height (when
+  // it gives them) and the ORB pyramid, whose coarsest level must keep a pixel.
+  const std::optional<fs::path> settings_path =
+      !opt.settings.empty() ? std::optional<fs::path>(opt.settings)
+                            : (sequence != nullptr ? sequence->camera_settings_file() : std::nullopt);
+  if (source->frame_count() > 0) check_first_image(source->frame(0).bgr.size(), settings_path, settings.frame.orb);
 
   OutputFolder out(opt.out, opt.force);
   cge::slam::System system(settings, intrinsics, std::move(segmenter));
@@ -626,6 +777,14 @@ int run(Options opt) {
     if (progress) progress_bar.draw(i + 1, n, elapsed_s());
   }
   system.finish();
+  if (n > 0 && std::none_of(system.frames().begin(), system.frames().end(),
+                            [](const cge::slam::FrameRecord& r) { return r.has_pose(); })) {
+    progress_bar.end_line();
+    std::fprintf(stderr,
+                 "%s: warning: every frame was lost (%d of %d): the trajectory is empty (wrong settings, "
+                 "depth scale or images?)\n",
+                 kProgram, n, n);
+  }
 
   out.write("trajectory.txt", [&](std::ostream& f) { cge::slam::write_trajectory(f, system); });
   out.write("keyframes.txt", [&](std::ostream& f) { cge::slam::write_keyframes(f, system.map()); });
@@ -705,6 +864,11 @@ int main(int argc, char** argv) {
                  "--segmentation yolo: pass a static object's instance on once detected in N of the last M frames "
                  "(N/M), people at once; off: every detection as the network gives it (docs/SEGMENTATION.md)")
       ->capture_default_str();
+  app.add_option("--depth-estimate", opt.depth_estimate,
+                 "modes YM, YMK: where a person's depth mean and MAD come from: box_samples (n random samples in the "
+                 "box, the paper's) or mask_pixels (every mask pixel with depth; docs/SEGMENTATION.md)")
+      ->check(CLI::IsMember({"box_samples", "mask_pixels"}))
+      ->capture_default_str();
   app.add_option("--temporal-overlap", opt.temporal_overlap,
                  "what the temporal filter's association compares between frames: box or mask IoU")
       ->check(CLI::IsMember({"box", "mask"}))
@@ -762,8 +926,13 @@ int main(int argc, char** argv) {
                              "normalised (by the mean exponent); default ") +
                      (cge::slam::LoopCloserSettings{}.exponent_scaling == cge::ScalingKind::raw ? "raw" : "normalised"))
       ->check(CLI::IsMember({"raw", "normalised"}));
-  app.add_option("--seed", opt.seed, "seed of the MAD samples (and of the rendered sequence)")->capture_default_str();
-  app.add_option("--frames", opt.frames, "process at most this many frames (rendered: default 300)");
+  app.add_option("--seed", opt.seed, "seed of the MAD samples (and of the rendered sequence)")
+      ->check(cge_tool::seed_check())
+      ->capture_default_str();
+  app.add_option("--frames", opt.frames,
+                 "process at most this many frames, >= 1 (rendered: default 300, at most " +
+                     std::to_string(cge::sim::kMaxPresetFrames) + ")")
+      ->each([&opt](const std::string&) { opt.frames_given = true; });
   app.add_option("--reference-min-observations", opt.reference_min_observations,
                  "ORB-SLAM2 keyframe baseline: count the reference keyframe's map points seen by >= this many "
                  "keyframes (ORB-SLAM2's nMinObs)")

@@ -21,6 +21,7 @@
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "cge/io/stderr_capture.hpp"
 #include "cge/sim/frame_source.hpp"
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
@@ -131,8 +132,12 @@ int run(const Options& opt) {
     for (std::size_t i = 0; i < paths.size() && !full(); i += static_cast<std::size_t>(opt.step)) {
       std::error_code ec;
       if (fs::is_directory(paths[i], ec)) throw std::invalid_argument("the image " + paths[i] + " is a directory");
+      cge::io::StderrCapture decoder_messages;  // libpng's complaints join the message below
       const cv::Mat img = cv::imread(paths[i], cv::IMREAD_COLOR);
-      if (img.empty()) throw std::invalid_argument("cannot read the image " + paths[i]);
+      const std::string said = decoder_messages.finish();
+      if (img.empty()) {
+        throw std::invalid_argument("cannot read the image " + paths[i] + (said.empty() ? "" : " (" + said + ")"));
+      }
       add_image(img);
     }
     source = opt.images_dir.empty() ? opt.list_file : opt.images_dir;
@@ -170,7 +175,9 @@ int main(int argc, char** argv) {
   app.add_option("--list", opt.list_file, "list file: one image path per line, or a TUM rgb.txt");
   app.add_option("--preset", opt.preset, "render this synthetic preset in memory instead (e.g. walking_xyz)");
   app.add_option("--frames", opt.preset_frames, "--preset: frames to render, 1 .. " + std::to_string(cge::sim::kMaxPresetFrames))->capture_default_str();
-  app.add_option("--preset-seed", opt.preset_seed, "--preset: the scene's seed")->capture_default_str();
+  app.add_option("--preset-seed", opt.preset_seed, "--preset: the scene's seed")
+      ->check(cge_tool::seed_check())
+      ->capture_default_str();
   app.add_option("--out", opt.out, "vocabulary file to write; an existing file only with --force")->required();
   app.add_flag("--force", opt.force, "overwrite --out when it exists");
   app.add_option("--features", opt.training.orb_features, "ORB features per image, >= 1")
@@ -185,7 +192,9 @@ int main(int argc, char** argv) {
   app.add_option("--iterations", opt.training.vocabulary.max_iterations, "k-medians rounds per node at most")
       ->check(cge_tool::above_zero())
       ->capture_default_str();
-  app.add_option("--seed", opt.training.seed, "seed of the k-means++ draws")->capture_default_str();
+  app.add_option("--seed", opt.training.seed, "seed of the k-means++ draws")
+      ->check(cge_tool::seed_check())
+      ->capture_default_str();
   app.add_option("--step", opt.step, "use every step-th image, >= 1")
       ->check(cge_tool::above_zero())
       ->capture_default_str();

@@ -96,6 +96,17 @@ inline CLI::Validator sign_check(bool zero_allowed) {
       rule);
 }
 inline CLI::Validator at_least_zero() { return sign_check(true); }
+
+/// Seeds are unsigned 64-bit; CLI11 would wrap "-1" to 2^64 - 1 without a word.
+inline CLI::Validator seed_check() {
+  return CLI::Validator(
+      [](const std::string& text) {
+        const std::size_t first = text.find_first_not_of(" \t");
+        if (first != std::string::npos && text[first] == '-') return "must be 0 .. 2^64 - 1, got " + text;
+        return std::string();
+      },
+      "0 .. 2^64 - 1");
+}
 inline CLI::Validator above_zero() { return sign_check(false); }
 
 /// A bad count or size, checked before any work: "<option> must be at most <limit> (<why>), got <value>".

@@ -758,7 +758,8 @@ TEST_CASE("mask_pixels: statistics and labels equal a scan of the whole image, n
         s.depth_estimate = cge::DepthEstimate::mask_pixels;
         DepthMADFilter<ScriptedEngine> f(s);
         f.engine.script = {0.5};
-        const Instances inst{cge::dynamic_instance(masks[0], boxes[0], 0), cge::dynamic_instance(masks[1], boxes[1], 0)};
+        const Instances inst{cge::dynamic_instance(masks[0], boxes[0], 0),
+                             cge::dynamic_instance(masks[1], boxes[1], 0)};
         const DepthMADResult r = f.filter(kps, depth, inst);
         REQUIRE(f.engine.draws == 0);
         std::vector<OracleStats> os;
@@ -772,8 +773,8 @@ TEST_CASE("mask_pixels: statistics and labels equal a scan of the whole image, n
           REQUIRE(got.samples_off_mask == 0);
           REQUIRE(got.mad_test_applied == os[j].applied);
           REQUIRE(got.mad_test_applied == (hole_rate < 0.5));  // the fixture exercises both outcomes
-          REQUIRE(got.skip_reason == (got.mad_test_applied ? cge::MadSkipReason::none
-                                                           : cge::MadSkipReason::too_little_depth_in_mask));
+          REQUIRE(got.skip_reason ==
+                  (got.mad_test_applied ? cge::MadSkipReason::none : cge::MadSkipReason::too_little_depth_in_mask));
           REQUIRE(got.mean_depth_m == Approx(os[j].mean).epsilon(1e-12));
           REQUIRE(got.mad_m == Approx(os[j].mad).epsilon(1e-12));
         }
@@ -805,7 +806,7 @@ TEST_CASE("skip reasons: too few valid samples, too little depth in the mask", "
   CHECK_FALSE(st.mad_test_applied);
   CHECK(st.skip_reason == cge::MadSkipReason::too_little_depth_in_mask);  // 0.3 < 0.5
   CHECK(st.mean_depth_m == 1.0);                                          // reported all the same
-  f.settings.min_valid_mask_fraction = 0.3;                                // 30 >= 0.3 * 100
+  f.settings.min_valid_mask_fraction = 0.3;                               // 30 >= 0.3 * 100
   st = f.filter(Keypoints{}, depth, inst).instances[0];
   CHECK(st.mad_test_applied);
   CHECK(st.skip_reason == cge::MadSkipReason::none);

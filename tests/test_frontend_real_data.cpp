@@ -84,7 +84,7 @@ struct RealFrame {
   std::vector<cv::KeyPoint> keypoints;
   std::vector<cge::SegmentedInstance> instances;
   std::vector<cge::DynamicInstance<cv::Mat>> dynamic;  // views of the people's masks in `instances`
-  cv::Mat maskrcnn_people;  // the reference: 255 on people
+  cv::Mat maskrcnn_people;                             // the reference: 255 on people
   std::vector<bool> on_edge;
   int edge_count = 0, candidate_count = 0;
   cge::opencv::DepthView depth() const { return cge::opencv::DepthView::from_u16(depth_u16); }
@@ -215,9 +215,10 @@ TEST_CASE(
 // edge pixels count too), and the test labels all 12 edge features, 2 more features inside the
 // Mask R-CNN people (more than 0.1 m off the nearby mask depth, so not "edge" by the criterion),
 // and none outside the Mask R-CNN people (120 candidates there).
-TEST_CASE("DepthMADFilter mask_pixels on TUM fr3 walking_xyz: every edge feature, no background (skipped without "
-          "../shared)",
-          "[frontend][mad][mask_pixels][shared]") {
+TEST_CASE(
+    "DepthMADFilter mask_pixels on TUM fr3 walking_xyz: every edge feature, no background (skipped without "
+    "../shared)",
+    "[frontend][mad][mask_pixels][shared]") {
   const RealFrame f = load_frame(kRgbStem, kDepthStem);
   if (!f.present) return;
   cge::DepthMADSettings settings;
@@ -248,9 +249,10 @@ TEST_CASE("DepthMADFilter mask_pixels on TUM fr3 walking_xyz: every edge feature
 // person-seed pairs; mask_pixels finds 5.7 % and 4.3 % of the mask pixels valid, mostly background
 // behind the people (mean 2.15 and 3.10 m, MAD 0.56 and 0.91 m): it skips both, where testing
 // would drop 11 of the 38 background features in the boxes (docs/SEGMENTATION.md).
-TEST_CASE("DepthMADFilter on a TUM frame without depth on the people: the skip and its reason (skipped without "
-          "../shared)",
-          "[frontend][mad][shared]") {
+TEST_CASE(
+    "DepthMADFilter on a TUM frame without depth on the people: the skip and its reason (skipped without "
+    "../shared)",
+    "[frontend][mad][shared]") {
   const RealFrame f = load_frame(kNoDepthRgbStem, kNoDepthDepthStem);
   if (!f.present) return;
   cge::DepthMADSettings defaults;

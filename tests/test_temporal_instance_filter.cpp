@@ -141,9 +141,9 @@ TEST_CASE("TemporalInstanceFilter: a static object appears, drops out for one fr
 TEST_CASE("TemporalInstanceFilter: the track is forgotten after M frames without a detection",
           "[segmentation][temporal_filter]") {
   const SegmentedInstance chair = rect_instance(kChair, cv::Rect(5, 5, 10, 10));
-  TemporalInstanceFilter filter(std::make_unique<ScriptedSegmenter>(std::vector<std::vector<SegmentedInstance>>{
-                                    {chair}, {}, {}, {}, {chair}}),
-                                n_of_m(2, 3));
+  TemporalInstanceFilter filter(
+      std::make_unique<ScriptedSegmenter>(std::vector<std::vector<SegmentedInstance>>{{chair}, {}, {}, {}, {chair}}),
+      n_of_m(2, 3));
   const cv::Mat image(kImage, CV_8UC3, cv::Scalar::all(0));
   const std::vector<int> tracks = {1, 1, 1, 0, 1};
   const std::vector<std::size_t> passed = {0, 0, 0, 0, 0};  // frame 4 starts a new track: 1 of 1
@@ -152,6 +152,21 @@ TEST_CASE("TemporalInstanceFilter: the track is forgotten after M frames without
     CHECK(filter.segment({image, "f"}).size() == passed[i]);
     CHECK(filter.track_count() == tracks[i]);
   }
+}
+
+TEST_CASE("TemporalInstanceFilter: a frame of another size forgets the tracks", "[segmentation][temporal_filter]") {
+  const SegmentedInstance chair = rect_instance(kChair, cv::Rect(5, 5, 10, 10));
+  TemporalInstanceFilter filter(
+      std::make_unique<ScriptedSegmenter>(std::vector<std::vector<SegmentedInstance>>{{chair}, {chair}, {}, {}}),
+      n_of_m(2, 3));
+  const cv::Mat image(kImage, CV_8UC3, cv::Scalar::all(0));
+  CHECK(filter.segment({image, "0"}).empty());
+  CHECK(filter.segment({image, "1"}).size() == 1);
+  CHECK(filter.segment({image, "2"}).size() == 1);  // held
+  CHECK(filter.track_count() == 1);
+  const cv::Mat other(kImage.height + 1, kImage.width, CV_8UC3, cv::Scalar::all(0));
+  CHECK(filter.segment({other, "3"}).empty());  // no mask of the old size is held into it
+  CHECK(filter.track_count() == 0);
 }
 
 TEST_CASE("TemporalInstanceFilter: two instances of one class keep their identities",
@@ -270,7 +285,8 @@ TEST_CASE("TemporalInstanceFilter: presence patterns against a direct window cou
   std::bernoulli_distribution present(0.6);
   const std::vector<int> classes = {kChair, kTv, 63, 66};  // chair, tv, laptop, keyboard
   constexpr int kFrames = 40;
-  for (const std::pair<int, int>& n_m : std::vector<std::pair<int, int>>{{1, 1}, {1, 3}, {2, 3}, {3, 4}, {3, 5}, {4, 4}}) {
+  for (const std::pair<int, int>& n_m :
+       std::vector<std::pair<int, int>>{{1, 1}, {1, 3}, {2, 3}, {3, 4}, {3, 5}, {4, 4}}) {
     const int n = n_m.first, m = n_m.second;
     CAPTURE(n, m);
     std::vector<std::vector<bool>> seen(classes.size(), std::vector<bool>(kFrames));
@@ -391,9 +407,8 @@ TEST_CASE("TemporalInstanceFilter: settings and input errors are named", "[segme
   // A mask of the wrong size with mask overlap.
   SegmentedInstance bad = rect_instance(kChair, cv::Rect(0, 0, 4, 4));
   bad.mask = cv::Mat(10, 10, CV_8UC1, cv::Scalar(255));
-  TemporalInstanceFilter f(
-      std::make_unique<ScriptedSegmenter>(std::vector<std::vector<SegmentedInstance>>{{bad}}),
-      n_of_m(1, 1, TemporalOverlap::mask));
+  TemporalInstanceFilter f(std::make_unique<ScriptedSegmenter>(std::vector<std::vector<SegmentedInstance>>{{bad}}),
+                           n_of_m(1, 1, TemporalOverlap::mask));
   const cv::Mat image(kImage, CV_8UC3, cv::Scalar::all(0));
   CHECK_THAT(invalid_argument_message([&] { f.segment({image, "0"}); }), Contains("mask"));
 }

@@ -1,5 +1,6 @@
 #include "cge/dataset/orbslam2_settings.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -27,6 +28,7 @@ class KeyReader {
     std::ifstream in(file, std::ios::binary);
     if (!in) throw std::invalid_argument("cannot open the settings file '" + file_ + "'");
     for (std::string line; std::getline(in, line);) lines_.push_back(line);
+    check_single_document();
     try {
       storage_.open(file_, cv::FileStorage::READ);
     } catch (const cv::Exception& e) {
@@ -37,6 +39,29 @@ class KeyReader {
       throw std::invalid_argument(
           "the settings file '" + file_ +
           "' is not a YAML map cv::FileStorage can read (ORB-SLAM2 files start with %YAML:1.0)");
+    }
+  }
+
+  /// A settings file is one YAML document: at most one "---" line, before any key, and no other
+  /// line starting with "---" or "...". cv::FileStorage's parser can loop for ever on further
+  /// document markers (found by fuzzing, OpenCV 4.6), so they are refused here, with their line.
+  void check_single_document() const {
+    bool marker_seen = false, key_seen = false;
+    for (std::size_t i = 0; i < lines_.size(); ++i) {
+      std::string l = lines_[i];
+      if (!l.empty() && l.back() == '\r') l.pop_back();
+      const std::string at = file_ + ":" + std::to_string(i + 1) + ": ";
+      if (l.compare(0, 3, "---") == 0 || l.compare(0, 3, "...") == 0) {
+        const bool plain = l.find_first_not_of(" \t", 3) == std::string::npos && l[0] == '-';
+        if (!plain || marker_seen || key_seen) {
+          throw std::invalid_argument(at + "'" + l + "': a settings file holds one YAML document (one '---' line, "
+                                      "after %YAML:1.0 and before the keys)");
+        }
+        marker_seen = true;
+        continue;
+      }
+      const std::size_t first = l.find_first_not_of(" \t");
+      if (first != std::string::npos && l[first] != '#' && l[first] != '%') key_seen = true;
     }
   }
 
@@ -107,6 +132,11 @@ class KeyReader {
 
 }  // namespace
 
+bool coarsest_level_fits(const OrbExtractorSettings& orb, int width_px, int height_px) {
+  const double smaller_side = std::min(width_px, height_px);
+  return orb.levels >= 1 && smaller_side / std::pow(orb.scale_factor, orb.levels - 1) >= 1.0;
+}
+
 cv::Mat OrbSlam2Settings::camera_matrix() const {
   return (cv::Mat_<double>(3, 3) << camera.fx_px, 0, camera.cx_px, 0, camera.fy_px, camera.cy_px, 0, 0, 1);
 }
@@ -157,11 +187,18 @@ OrbSlam2Settings read_orbslam2_settings(const fs::path& file) {
 
   OrbExtractorSettings& o = s.orb;
   o.features = r.integer("ORBextractor.nFeatures", kOptional).value_or(o.features);
-  r.require(o.features >= 1, "ORBextractor.nFeatures", o.features, ">= 1");
+  r.require(o.features >= 1 && o.features <= kMaxOrbFeatures, "ORBextractor.nFeatures", o.features,
+            ("1 .. " + std::to_string(kMaxOrbFeatures)).c_str());
   o.scale_factor = r.real("ORBextractor.scaleFactor", kOptional).value_or(o.scale_factor);
   r.require(o.scale_factor > 1, "ORBextractor.scaleFactor", o.scale_factor, "> 1");
   o.levels = r.integer("ORBextractor.nLevels", kOptional).value_or(o.levels);
-  r.require(o.levels >= 1, "ORBextractor.nLevels", o.levels, ">= 1");
+  r.require(o.levels >= 1 && o.levels <= kMaxOrbLevels, "ORBextractor.nLevels", o.levels,
+            ("1 .. " + std::to_string(kMaxOrbLevels)).c_str());
+  if (s.width_px > 0) {
+    r.require(coarsest_level_fits(o, s.width_px, s.height_px), "ORBextractor.nLevels", o.levels,
+              "the coarsest level of a Camera.width x Camera.height image keeps no pixel: scaleFactor^(nLevels - 1) "
+              "must not exceed the smaller side");
+  }
   o.initial_fast_threshold = r.integer("ORBextractor.iniThFAST", kOptional).value_or(o.initial_fast_threshold);
   r.require(o.initial_fast_threshold >= 1 && o.initial_fast_threshold <= kMaxFastThreshold, "ORBextractor.iniThFAST",
             o.initial_fast_threshold, "1 .. 255");

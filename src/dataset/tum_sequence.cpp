@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "cge/dataset/tum_list.hpp"
+#include "cge/io/stderr_capture.hpp"
 #include "cge/metrics/tum_trajectory_io.hpp"
 #include "text_fields.hpp"
 
@@ -87,14 +88,18 @@ cv::Mat read_image(const fs::path& path, int flags, const std::string& source, c
     throw std::invalid_argument(source + ": the " + what + " image " + quoted(path) + " does not exist");
   }
   cv::Mat image;
+  // The decoders' own complaints (libpng's "Read Error") join this message instead of preceding it.
+  io::StderrCapture decoder_messages;
   try {
     image = cv::imread(path.string(), flags);
   } catch (const cv::Exception& e) {
+    decoder_messages.finish();
     throw std::invalid_argument(source + ": cannot read the " + what + " image " + quoted(path) + ": " + e.what());
   }
+  const std::string said = decoder_messages.finish();
   if (image.empty()) {
     throw std::invalid_argument(source + ": cannot read the " + what + " image " + quoted(path) +
-                                " (not an image OpenCV can decode)");
+                                " (not an image OpenCV can decode" + (said.empty() ? "" : ": " + said) + ")");
   }
   return image;
 }

@@ -531,8 +531,11 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
     for (const char* n : kPresetNames) msg << ' ' << n;
     throw std::invalid_argument(msg.str());
   }
-  if (frames < 1 || frames > kMaxPresetFrames) {
-    throw std::invalid_argument("make_preset(" + name + "): frames must lie in 1 .. " +
+  if (frames < 1) {
+    throw std::invalid_argument("make_preset(" + name + "): frames must be >= 1 (got " + std::to_string(frames) + ")");
+  }
+  if (frames > kMaxPresetFrames) {
+    throw std::invalid_argument("make_preset(" + name + "): frames must be at most kMaxPresetFrames = " +
                                 std::to_string(kMaxPresetFrames) + " (got " + std::to_string(frames) + ")");
   }
   validate_preset_settings(settings);

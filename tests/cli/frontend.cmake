@@ -137,6 +137,9 @@ cge_cli_test(frontend_out_image_extension EXIT 2 PROGRAM cge_frontend ${fe_masks
   STDERR "--out-image: OpenCV cannot write an image named")
 
 # --help and --version.
+# A truncated PNG: the tool's own error comes first, libpng's complaint only inside it.
+cge_cli_test(frontend_broken_png EXIT 2 PROGRAM cge_frontend ARGS --rgb frontend/broken.png --depth frontend/depth.png
+  STDERR "^cge_frontend: error: --rgb: cannot read 'frontend/broken\\.png' as an image")
 cge_cli_test(frontend_help PROGRAM cge_frontend ARGS --help STDOUT ".*Usage:.*" ".*--rgb.*" ".*--out-image.*")
 string(REPLACE "." "\\." fe_version_regex "${PROJECT_VERSION}")
 cge_cli_test(frontend_version PROGRAM cge_frontend ARGS --version STDOUT "cge_frontend ${fe_version_regex}")

@@ -9,6 +9,12 @@
 //     brute-force neighbour search -> degree-degree entropy, finite
 //   3 TUM trajectory -> ATE of the trajectory against itself, zero
 //   4 ground-truth loops, 5 loops.csv queries, 6 vocabulary, 7 TUM image list
+//   8 TUM trajectory keeping the later of two lines with one timestamp (cge_eval's default)
+//   and, when built with OpenCV (CGE_FUZZ_HAS_OPENCV):
+//   9 ORB-SLAM2 settings YAML (read_orbslam2_settings reads a file: the text goes to a temporary
+//     file of this process first) -> bounded ORB settings whose pyramid fits Camera.width x height
+//   10 instances.csv of a precomputed mask folder -> ids in 1 .. 65535, classes in 0 .. 79
+// CGE_FUZZ_READER=<k> in the environment pins every input to reader k (docs/CLI.md has the runs).
 // Built two ways (tests/fuzz/CMakeLists.txt): with libFuzzer when CGE_BUILD_FUZZERS is on (Clang),
 // and always as cge_fuzz_replay, which ctest runs over tests/fuzz/corpus.
 #include <cmath>
@@ -29,6 +35,16 @@
 #include "cge/metrics/ground_truth_loops_io.hpp"
 #include "cge/metrics/loop_queries_io.hpp"
 #include "cge/metrics/tum_trajectory_io.hpp"
+
+#ifdef CGE_FUZZ_HAS_OPENCV
+#include <filesystem>
+#include <fstream>
+
+#include <unistd.h>
+
+#include "cge/dataset/orbslam2_settings.hpp"
+#include "cge/segmentation/precomputed_mask_reader.hpp"
+#endif
 
 namespace {
 
@@ -86,10 +102,59 @@ void run(int reader, std::istream& in) {
     case 6:
       (void)cge::bow::Vocabulary::load(in, "fuzz");
       break;
-    default:
+    case 7:
       (void)cge::dataset::parse_tum_list(in, "fuzz");
       break;
+    case 8: {
+      cge::metrics::TumReadSettings settings;
+      settings.duplicate_timestamps = cge::metrics::DuplicateTimestamps::keep_last;
+      const cge::metrics::Trajectory t = cge::metrics::read_tum_trajectory(in, "fuzz", settings);
+      for (std::size_t i = 1; i < t.size(); ++i) {
+        require(t[i - 1].timestamp_s < t[i].timestamp_s, "kept timestamps strictly increase");
+      }
+      break;
+    }
+#ifdef CGE_FUZZ_HAS_OPENCV
+    case 9: {
+      static const std::filesystem::path file =
+          std::filesystem::temp_directory_path() / ("cge_fuzz_settings." + std::to_string(::getpid()) + ".yaml");
+      {
+        std::ofstream out(file, std::ios::binary | std::ios::trunc);
+        out << in.rdbuf();
+      }
+      const cge::dataset::OrbSlam2Settings s = cge::dataset::read_orbslam2_settings(file);
+      require(s.camera.fx_px > 0 && s.camera.fy_px > 0 && s.depth_map_factor > 0, "accepted intrinsics are positive");
+      require(s.orb.levels <= cge::dataset::kMaxOrbLevels && s.orb.features <= cge::dataset::kMaxOrbFeatures,
+              "accepted ORB settings are bounded");
+      require(s.width_px == 0 || cge::dataset::coarsest_level_fits(s.orb, s.width_px, s.height_px),
+              "an accepted pyramid fits the camera's image");
+      break;
+    }
+    case 10: {
+      for (const auto& [id, instance] : cge::read_instances_csv(in, "fuzz")) {
+        require(id == instance.id && id >= 1 && id <= 65535, "instance ids lie in 1 .. 65535");
+        require(instance.class_id >= 0 && instance.class_id <= 79, "class ids lie in 0 .. 79");
+      }
+      break;
+    }
+#endif
+    default:
+      break;
   }
+}
+
+constexpr int kReaders = 11;
+
+/// CGE_FUZZ_READER=<k> pins every input to reader k (its first byte is then ignored), so that each
+/// reader gets its own run of a given length; -1 (unset): the first byte picks.
+int pinned_reader() {
+  static const int reader = [] {
+    const char* text = std::getenv("CGE_FUZZ_READER");
+    if (text == nullptr || *text == '\0') return -1;
+    const int k = std::atoi(text);
+    return k >= 0 && k < kReaders ? k : -1;
+  }();
+  return reader;
 }
 
 }  // namespace
@@ -98,7 +163,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size == 0) return 0;
   std::istringstream in(std::string(reinterpret_cast<const char*>(data) + 1, size - 1));
   try {
-    run(data[0] % 8, in);
+    run(pinned_reader() >= 0 ? pinned_reader() : data[0] % kReaders, in);
   } catch (const std::invalid_argument&) {
     // the reader refused the input: the expected outcome for most inputs
   }

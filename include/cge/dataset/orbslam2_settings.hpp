@@ -66,11 +66,23 @@ struct OrbSlam2Settings {
   cv::Mat camera_matrix() const;
 };
 
+/// Largest accepted ORBextractor.nLevels and .nFeatures: every level is an image and the extractor
+/// reserves per feature, so a stray huge value exhausts memory; ORB-SLAM2's files use 8 levels and
+/// 1000 .. 2000 features.
+constexpr int kMaxOrbLevels = 64;
+constexpr int kMaxOrbFeatures = 100000;
+
+/// Whether every level of the ORB pyramid of a width x height image keeps at least one pixel,
+/// min(width, height) / scaleFactor^(nLevels - 1) >= 1 (OpenCV's ORB stops with an assertion on
+/// a level it rounds to 0 x 0).
+bool coarsest_level_fits(const OrbExtractorSettings& orb, int width_px, int height_px);
+
 /// Reads an ORB-SLAM2 settings file. Throws std::invalid_argument naming the file (and the key,
 /// with its line when it can be found) when the file is missing or not readable by cv::FileStorage,
 /// a required key is missing, a value is not a number (or not an integer for an integer key), or a
 /// value is out of range (fx, fy, fps, bf, ThDepth, DepthMapFactor > 0; width and height > 0 and
-/// given together; nFeatures, nLevels >= 1; scaleFactor > 1; FAST thresholds in 1 .. 255).
+/// given together; nFeatures in 1 .. kMaxOrbFeatures, nLevels in 1 .. kMaxOrbLevels; scaleFactor
+/// > 1; FAST thresholds in 1 .. 255; with Camera.width and .height, coarsest_level_fits).
 OrbSlam2Settings read_orbslam2_settings(const std::filesystem::path& file);
 
 /// How keypoints are undistorted (cv::undistortPoints' iteration).

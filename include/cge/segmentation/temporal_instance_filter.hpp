@@ -19,7 +19,8 @@
 //   current detection; a track passing on without a detection in this frame (a short dropout)
 //   passes on as its last detection (mask, box, score). So a new object appears after N - 1
 //   frames, a dropout of up to M - N frames is bridged, and an object gone for good is held for
-//   M - N frames. A track detected in none of the last M frames is forgotten.
+//   M - N frames. A track detected in none of the last M frames is forgotten, and every track
+//   when a frame's size differs from the previous frame's.
 //
 // Output order: the wrapped segmenter's detections that pass on, in its order, then the held
 // tracks in the order the tracks were started; ids are renumbered 1, 2, ... in that order (ids are
@@ -133,6 +134,9 @@ class TemporalInstanceFilter final : public InstanceSegmenter {
 
   std::vector<SegmentedInstance> segment(const FrameImage& frame) override {
     std::vector<SegmentedInstance> detections = inner_->segment(frame);
+    // A frame of another size starts another sequence: a held mask would not fit it.
+    if (frame.bgr.size() != image_size_) tracks_.clear();
+    image_size_ = frame.bgr.size();
     counts_ = TemporalFilterFrameCounts{};
     counts_.detected = static_cast<int>(detections.size());
     for (Track& t : tracks_) t.history <<= 1;  // the new frame: not seen yet
@@ -225,14 +229,13 @@ class TemporalInstanceFilter final : public InstanceSegmenter {
 
  private:
   struct Track {
-    SegmentedInstance last;      ///< its last detection
-    int area = 0;                ///< pixels set in last.mask (mask overlap only)
-    std::uint64_t history = 0;   ///< bit i: detected i frames ago (bit 0: the current frame)
+    SegmentedInstance last;     ///< its last detection
+    int area = 0;               ///< pixels set in last.mask (mask overlap only)
+    std::uint64_t history = 0;  ///< bit i: detected i frames ago (bit 0: the current frame)
   };
 
   std::uint64_t window_bits() const {
-    return settings_.window_frames == 64 ? ~std::uint64_t{0}
-                                         : (std::uint64_t{1} << settings_.window_frames) - 1;
+    return settings_.window_frames == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << settings_.window_frames) - 1;
   }
   int seen(const Track& t) const {
     std::uint64_t bits = t.history & window_bits();
@@ -253,6 +256,7 @@ class TemporalInstanceFilter final : public InstanceSegmenter {
   std::unique_ptr<InstanceSegmenter> inner_;
   TemporalInstanceFilterSettings settings_;
   std::vector<Track> tracks_;
+  cv::Size image_size_;  ///< the size of the last frame
   TemporalFilterFrameCounts counts_;
 };
 
