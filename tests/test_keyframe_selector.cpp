@@ -1095,6 +1095,7 @@ TEST_CASE("ORB-SLAM2 baseline: the close-point rule", "[keyframe][orbslam2]") {
 TEST_CASE("ORB-SLAM2 baseline: the ratio boundary is strict", "[keyframe][orbslam2]") {
   OrbSettings s = orb_settings();
   s.reference_ratio = 0.5;  // exact in binary
+  s.first_reference_ratio = 0.5;
   Orb orb(s);
   orb.step(tracked(0, 200));
   require_none(orb.step(tracked(1, 100)));

@@ -117,9 +117,14 @@ TEST_CASE("Real fr1/rpy: keypoints are undistorted as OpenCV and the forward mod
     }
   }
   CHECK(largest_move > 5);  // fr1's distortion moves corner keypoints by pixels, not by rounding
-  // The undistorted image is wider than 640 x 480 at the corners (k1 > 0 pulls them outwards).
-  CHECK(frame.undistorted_bounds.min_x_px < 0);
-  CHECK(frame.undistorted_bounds.max_x_px > 640);
+  // The bounds are the undistorted corners: fr1's k1 > 0 moves them inwards by pixels.
+  const std::vector<cv::Point2f> c = cge::opencv::undistort_pixels({{0, 0}, {640, 0}, {0, 480}, {640, 480}}, k, d);
+  CHECK(frame.undistorted_bounds.min_x_px == std::min(c[0].x, c[2].x));
+  CHECK(frame.undistorted_bounds.max_x_px == std::max(c[1].x, c[3].x));
+  CHECK(frame.undistorted_bounds.min_y_px == std::min(c[0].y, c[1].y));
+  CHECK(frame.undistorted_bounds.max_y_px == std::max(c[2].y, c[3].y));
+  CHECK(frame.undistorted_bounds.min_x_px > 5);
+  CHECK(frame.undistorted_bounds.max_x_px < 635);
 }
 
 TEST_CASE("Real fr1/rpy: bounded keyframes and map points, deterministic (skipped without ../shared)",
