@@ -510,6 +510,9 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
                            {"local_ba_fixed", used.local_mapping.fixed_keyframes},
                            {"reference_min_observations", used.mapping.reference_min_observations},
                            {"keyframe_interval", used.patch_keyframes.interval_frames},
+                           {"keyframe_min_gap", used.orbslam2_keyframes.min_frame_gap},
+                           {"orb_spread", used.frame.orb.spread_oversampling},
+                           {"map_maintenance", opt.map_maintenance},
                            {"loop_correction", opt.loop_correction}};
   j["dynamic_leak"] = dynamic_leak(frames);
   nlohmann::ordered_json stages;
