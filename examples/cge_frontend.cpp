@@ -42,6 +42,7 @@
 #include "cge/segmentation/precomputed_mask_reader.hpp"
 #include "cge/segmentation/yolov8_segmenter.hpp"
 
+#include "cge/dataset/orbslam2_settings.hpp"
 #include "cge/io/stderr_capture.hpp"
 #include "tool_support.hpp"
 
@@ -138,6 +139,8 @@ std::set<int> dynamic_class_ids(const std::vector<std::string>& names) {
 
 void check_options(const Options& opt) {
   if (opt.features < 1) throw UsageError("--features must be at least 1, got " + std::to_string(opt.features));
+  cge_tool::require_at_most("--features", opt.features, cge::dataset::kMaxOrbFeatures,
+                            "the ORB extractor reserves memory per feature");
   if (!(std::isfinite(opt.mad_scale) && opt.mad_scale >= 0)) {
     throw UsageError("--mad-scale must be a finite number >= 0, got " + std::to_string(opt.mad_scale));
   }

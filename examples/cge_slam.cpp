@@ -51,6 +51,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "cge/dataset/orbslam2_settings.hpp"
@@ -683,6 +684,9 @@ int run(Options opt) {
       {"verify_groups", opt.loop_verify_groups},
       {"min_group_total_ratio", loop_settings.min_group_total_ratio}};
   std::unique_ptr<cge::bow::Vocabulary> vocabulary;
+  if (!opt.vocabulary.empty() && fs::is_directory(opt.vocabulary)) {
+    throw UsageError("--vocabulary: '" + opt.vocabulary + "' is a directory, not a file");
+  }
   if (!opt.vocabulary.empty()) {
     vocabulary = std::make_unique<cge::bow::Vocabulary>(cge::bow::Vocabulary::load_file(opt.vocabulary));
   }
@@ -962,5 +966,7 @@ int main(int argc, char** argv) {
   app.add_flag("--force", opt.force, "write into a non-empty folder: replace cge_slam's own files, delete nothing");
 
   if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
+  // OpenCV's own warnings would come before the tool's message; its errors arrive as exceptions.
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
   return cge_tool::run_reporting_errors(kProgram, &progress_bar, [&] { return run(opt); });
 }

@@ -21,6 +21,7 @@
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "cge/dataset/orbslam2_settings.hpp"
 #include "cge/io/stderr_capture.hpp"
 #include "cge/sim/frame_source.hpp"
 #include "cge/sim/presets.hpp"
@@ -108,6 +109,8 @@ int run(const Options& opt) {
     }
     cge_tool::require_at_most("--frames", opt.preset_frames, cge::sim::kMaxPresetFrames, "10 minutes at 30 Hz");
   }
+  cge_tool::require_at_most("--features", opt.training.orb_features, cge::dataset::kMaxOrbFeatures,
+                            "the ORB extractor reserves memory per feature");
   opt.training.vocabulary.validate();
 
   // Images are turned into descriptors one at a time, so memory grows with the descriptors (the

@@ -22,6 +22,7 @@ class KeyReader {
  public:
   KeyReader(const fs::path& file, OrbSlam2Settings& out) : file_(file.string()), out_(out) {
     std::error_code ec;
+    if (fs::is_directory(file, ec)) throw std::invalid_argument("the settings file '" + file_ + "' is a directory");
     if (!fs::is_regular_file(file, ec)) {
       throw std::invalid_argument("the settings file '" + file_ + "' does not exist or is not a regular file");
     }

@@ -137,6 +137,8 @@ cge_cli_test(frontend_out_image_extension EXIT 2 PROGRAM cge_frontend ${fe_masks
   STDERR "--out-image: OpenCV cannot write an image named")
 
 # --help and --version.
+cge_cli_test(frontend_too_many_features EXIT 2 PROGRAM cge_frontend MEMORY_KB 2000000 ${fe_masks} --features 2000000000
+  STDERR "--features must be at most 100000")
 # A truncated PNG: the tool's own error comes first, libpng's complaint only inside it.
 cge_cli_test(frontend_broken_png EXIT 2 PROGRAM cge_frontend ARGS --rgb frontend/broken.png --depth frontend/depth.png
   STDERR "^cge_frontend: error: --rgb: cannot read 'frontend/broken\\.png' as an image")
