@@ -117,6 +117,7 @@ struct Options {
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   int keyframe_interval = cge::PatchKeyframeSettings<double>{}.interval_frames;  // mode YMK: k
   int orb_spread = cge::slam::OrbSettings{}.spread_oversampling;
+  int local_ba_iterations = cge::slam::LocalMappingSettings{}.bundle.solver.max_iterations;
   std::string map_maintenance = "all";
   int keyframe_min_gap = cge::slam::SystemSettings{}.orbslam2_keyframes.min_frame_gap;
   std::string loop_correction = "pgo+ba";                                        // none | pgo | pgo+ba
@@ -513,6 +514,7 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
                            {"keyframe_interval", used.patch_keyframes.interval_frames},
                            {"keyframe_min_gap", used.orbslam2_keyframes.min_frame_gap},
                            {"orb_spread", used.frame.orb.spread_oversampling},
+                           {"local_ba_iterations", used.local_mapping.bundle.solver.max_iterations},
                            {"map_maintenance", opt.map_maintenance},
                            {"loop_correction", opt.loop_correction}};
   j["dynamic_leak"] = dynamic_leak(frames);
@@ -595,6 +597,7 @@ int run(Options opt) {
   settings.mapping.reference_min_observations = opt.reference_min_observations;
   settings.patch_keyframes.interval_frames = opt.keyframe_interval;
   settings.frame.orb.spread_oversampling = opt.orb_spread;
+  settings.local_mapping.bundle.solver.max_iterations = opt.local_ba_iterations;
   {
     cge::slam::LocalMappingSettings& lm = settings.local_mapping;
     const std::string& m = opt.map_maintenance;
@@ -951,6 +954,9 @@ int main(int argc, char** argv) {
   app.add_option("--map-maintenance", opt.map_maintenance,
                  "map maintenance after each keyframe: 'all', 'none' or a comma list of cull_points, triangulate, "
                  "fuse, cull_keyframes");
+  app.add_option("--local-ba-iterations", opt.local_ba_iterations,
+                 "Ceres iterations per round of the local BA (its time budget per keyframe; 2 rounds)")
+      ->check(CLI::Range(1, 1000));
   app.add_option("--orb-spread", opt.orb_spread,
                  "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")
       ->check(CLI::Range(1, 8));
