@@ -265,8 +265,9 @@ int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::s
     const std::int64_t tracked = track.map_point_ids[static_cast<std::size_t>(i)];
     if (tracked >= 0) map_.add_observation(tracked, id, i);
   }
-  // New points from depth, nearest first: every close one, far ones until the keyframe observes
-  // min_new_points (ORB-SLAM2's RGB-D rule; far depth is noisy, but a view of distant walls needs points).
+  // New points from depth, nearest first, every untracked static keypoint under max_new_point_depth_m;
+  // with only_close_new_points, far ones only until the keyframe observes min_new_points (ORB-SLAM2's
+  // RGB-D rule).
   std::vector<std::pair<double, int>> by_depth;  // (depth, keypoint), ties by keypoint
   for (int i = 0; i < frame.size(); ++i) {
     if (!frame.is_static(i) || !frame.has_depth(i)) continue;
