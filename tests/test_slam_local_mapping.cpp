@@ -124,6 +124,38 @@ TEST_CASE("local_bundle_adjustment keeps keyframes outside the window fixed and 
   CHECK(error_after > 1e-5);
 }
 
+TEST_CASE("local_bundle_adjustment fixes the outside keyframes that observe most of the window's points", "[slam]") {
+  std::mt19937 rng(13);
+  TruthMap t = make_map(6, 60, rng);
+  // Keyframe 2 sees points 0..29 only, none of which keyframe 5 sees (5 sees 30..59): it is not
+  // covisible with 5 but observes 30 of the window's points. Keyframe 3 sees points 50..59 only.
+  for (int j = 0; j < 30; ++j) t.map.erase_observation(j, 5);
+  for (int j = 30; j < 60; ++j) t.map.erase_observation(j, 2);
+  for (int j = 0; j < 50; ++j) t.map.erase_observation(j, 3);
+  cge::slam::LocalMappingSettings settings;
+  settings.covisible_keyframes = 2;  // keyframe 5 shares 30 points with 0, 1 and 4, 10 with 3: window 5, 0, 1
+  settings.fixed_keyframes = 2;
+  const cge::slam::LocalBundleAdjustmentReport report =
+      cge::slam::local_bundle_adjustment(t.map, 5, kIntrinsics, settings, 1.2);
+  REQUIRE(report.ran);
+  CHECK(report.window_keyframes == 3);
+  // Outside observers of the window's 60 points: 4 (60), 2 (30), 3 (10); the two first are fixed,
+  // with keyframe 0 (the gauge). Ranked by covisibility with keyframe 5, 3 would have come before 2.
+  CHECK(report.fixed_keyframe_ids == std::vector<int>{0, 2, 4});
+  CHECK(report.fixed_keyframes == 3);
+  // Observations of 0, 1, 5 (window), 2 and 4 take part; 3's are left out.
+  CHECK(report.observations == 60 + 60 + 30 + 30 + 60);
+  settings.fixed_keyframes = 3;
+  TruthMap again = make_map(6, 60, rng);
+  for (int j = 0; j < 30; ++j) again.map.erase_observation(j, 5);
+  for (int j = 30; j < 60; ++j) again.map.erase_observation(j, 2);
+  for (int j = 0; j < 50; ++j) again.map.erase_observation(j, 3);
+  const cge::slam::LocalBundleAdjustmentReport all =
+      cge::slam::local_bundle_adjustment(again.map, 5, kIntrinsics, settings, 1.2);
+  CHECK(all.fixed_keyframe_ids == std::vector<int>{0, 2, 3, 4});
+  CHECK(all.observations == 60 + 60 + 30 + 30 + 60 + 10);
+}
+
 TEST_CASE("local_bundle_adjustment without a point seen twice does nothing; unknown keyframes throw", "[slam]") {
   cge::slam::Map map;
   cge::slam::Keyframe kf;

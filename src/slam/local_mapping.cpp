@@ -37,18 +37,10 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
   }
   LocalBundleAdjustmentReport report;
   // The window: the new keyframe and its most covisible ones; keyframe 0 stays fixed (the gauge).
-  // The next most covisible keyframes are the fixed observers (LocalMappingSettings::fixed_keyframes).
   std::vector<int> window{keyframe_id};
-  std::vector<int> observers;
-  for (const int id : map.covisible_keyframes(keyframe_id, lm.covisible_keyframes + lm.fixed_keyframes)) {
-    (static_cast<int>(window.size()) <= lm.covisible_keyframes ? window : observers).push_back(id);
-  }
+  for (const int id : map.covisible_keyframes(keyframe_id, lm.covisible_keyframes)) window.push_back(id);
   std::sort(window.begin(), window.end());
-  std::sort(observers.begin(), observers.end());
-  const auto takes_part = [&](int k) {
-    return std::binary_search(window.begin(), window.end(), k) ||
-           std::binary_search(observers.begin(), observers.end(), k);
-  };
+  const auto in_window = [&](int k) { return std::binary_search(window.begin(), window.end(), k); };
   // Points: those the window observes and at least two keyframes see (one view constrains nothing).
   std::vector<std::int64_t> point_ids;
   for (const int k : window) {
@@ -59,6 +51,28 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
   std::sort(point_ids.begin(), point_ids.end());
   point_ids.erase(std::unique(point_ids.begin(), point_ids.end()), point_ids.end());
   if (point_ids.empty()) return report;
+  // Fixed observers, as in ORB-SLAM2's local BA: the keyframes outside the window that observe its
+  // points, here the fixed_keyframes of them with most such observations (ties: smaller id). They
+  // hold the gauge; ranked by covisibility with the new keyframe alone, a window that already took
+  // every covisible keyframe was left one weakly connected anchor, and a few wrong matches to it
+  // moved the whole window (decimetres on the real fr1/rpy frames, docs/REAL_DATA.md).
+  std::map<int, int> outside_observations;
+  for (const std::int64_t id : point_ids) {
+    for (const Observation& o : map.map_point(id).observations) {
+      if (!in_window(o.keyframe_id)) ++outside_observations[o.keyframe_id];
+    }
+  }
+  std::vector<std::pair<int, int>> ranked;  // (-observations, keyframe)
+  for (const auto& [k, n] : outside_observations) ranked.emplace_back(-n, k);
+  std::sort(ranked.begin(), ranked.end());
+  std::vector<int> observers;
+  for (std::size_t i = 0; i < ranked.size() && static_cast<int>(i) < lm.fixed_keyframes; ++i) {
+    observers.push_back(ranked[i].second);
+  }
+  std::sort(observers.begin(), observers.end());
+  const auto takes_part = [&](int k) {
+    return in_window(k) || std::binary_search(observers.begin(), observers.end(), k);
+  };
   // Poses: the window, then the fixed observers that see a point, each indexed once.
   std::map<int, int> pose_index;
   std::vector<int> keyframe_of;
@@ -69,8 +83,7 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
     const int index = static_cast<int>(keyframe_of.size());
     pose_index.emplace(k, index);
     keyframe_of.push_back(k);
-    const bool in_window = std::binary_search(window.begin(), window.end(), k);
-    if (!in_window || k == 0) fixed.push_back(index);
+    if (!in_window(k) || k == 0) fixed.push_back(index);
     return index;
   };
   for (const int k : window) index_of(k);
@@ -134,9 +147,13 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
   report.ran = true;
   report.window_keyframes = static_cast<int>(window.size());
   report.fixed_keyframes = static_cast<int>(fixed.size());
+  for (const int index : fixed) report.fixed_keyframe_ids.push_back(keyframe_of[static_cast<std::size_t>(index)]);
+  std::sort(report.fixed_keyframe_ids.begin(), report.fixed_keyframe_ids.end());
   report.points = static_cast<int>(points.size());
   report.observations = static_cast<int>(observations.size());
   report.outliers = ba.outlier_count;
+  report.iterations = ba.iterations;
+  report.converged = ba.converged;
   return report;
 }
 

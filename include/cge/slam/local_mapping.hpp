@@ -6,12 +6,14 @@
 //
 // The window: the new keyframe and its `covisible_keyframes` most covisible keyframes. The points:
 // those the window observes that at least two keyframes see and that keep a depth observation in the
-// problem. Observations from the most covisible keyframes outside the window take part with their
-// poses fixed (at most fixed_keyframes of them), and keyframe 0 is always fixed (the world is its
-// camera). Pixel + depth observations through cge::BundleAdjuster.
+// problem. Observations from keyframes outside the window take part with their poses fixed: as in
+// ORB-SLAM2, the keyframes that observe the window's points, here at most fixed_keyframes of them,
+// those with most such observations. Keyframe 0 is always fixed (the world is its camera). Pixel +
+// depth observations through cge::BundleAdjuster.
 //
 // Deterministic: keyframes and points in id order, one-threaded Ceres.
 #include <cstdint>
+#include <vector>
 
 #include "cge/ceres/bundle_adjustment.hpp"
 #include "cge/core/pinhole_intrinsics.hpp"
@@ -27,6 +29,7 @@ struct LocalBundleAdjustmentReport {
   bool ran = false;          ///< false: no point seen twice, or no fixed keyframe for the gauge
   int window_keyframes = 0;  ///< keyframes in the window (keyframe 0 counted when in it)
   int fixed_keyframes = 0;   ///< keyframes held fixed (outside observers and keyframe 0)
+  std::vector<int> fixed_keyframe_ids;  ///< their ids, ascending
   int points = 0;            ///< map points optimised
   /// Points the window observes, left out: no observation taking part has depth (pixels alone do not
   /// fix a point along its ray when the keyframes have little baseline).
@@ -35,6 +38,8 @@ struct LocalBundleAdjustmentReport {
   int points_kept = 0;
   int observations = 0;      ///< observations in the problem
   int outliers = 0;          ///< observations over the chi2 threshold at the optimum
+  int iterations = 0;        ///< Ceres iterations over all rounds
+  bool converged = false;    ///< the last round reached a convergence tolerance
 };
 
 /// The bundle-adjustment observation of keypoint `keypoint_index` of `kf`: its pixel with sigma

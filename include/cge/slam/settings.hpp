@@ -179,9 +179,8 @@ struct LocalMappingSettings {
   MapMaintenanceSettings maintenance;
   bool bundle_adjustment = true;  ///< false: keyframes and map points stay as tracking made them
   int covisible_keyframes = 10;   ///< window: the new keyframe and at most this many most covisible, count >= 0
-  /// Fixed observers: of the keyframes outside the window that see its points, only the next this
-  /// many most covisible with the new keyframe enter (held fixed); observations from the others are
-  /// left out. Without a cap, a policy that makes nearly every frame a keyframe (ORB-SLAM2-style, no
+  /// Fixed observers: of the keyframes outside the window that see its points, only this many
+  /// with most observations of them enter (held fixed); observations from the others are left out. Without a cap, a policy that makes nearly every frame a keyframe (ORB-SLAM2-style, no
   /// keyframe culling) puts hundreds of fixed poses into every window (seconds per keyframe).
   /// Count >= 0 (0: the window alone, which then needs keyframe 0 in it for the gauge).
   int fixed_keyframes = 10;
