@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include "cge/dataset/orbslam2_settings.hpp"
+#include "cge/slam/settings_from_orbslam2.hpp"
 #include "cge/sim/tum_writer.hpp"
 #include "temp_dir.hpp"
 #include "test_support.hpp"
@@ -111,6 +112,7 @@ TEST_CASE("ORB-SLAM2 settings: the synthetic sequences' camera.yaml", "[dataset]
   ws.orb_min_fast_threshold = 5;
   ws.orb_baseline_times_fx = 35;
   ws.orb_close_depth_baselines = 45;
+  ws.depth_sigma_per_m = 0.004;
   TempDir tmp{"cge_test_dataset_settings"};
   const fs::path file = tmp.path() / "camera.yaml";
   write_text(file, cge::sim::format_camera_yaml(camera, 25.0, ws));
@@ -139,6 +141,9 @@ TEST_CASE("ORB-SLAM2 settings: the synthetic sequences' camera.yaml", "[dataset]
   CHECK(s.source == file.string());
   CHECK(s.baseline_m() == Approx(35.0 / 512.25));
   CHECK(s.close_depth_threshold_m() == Approx(45.0 * 35.0 / 512.25));
+  REQUIRE(s.depth_sigma_per_m_key.has_value());
+  CHECK(*s.depth_sigma_per_m_key == 0.004);
+  CHECK(s.depth_sigma_per_m() == 0.004);
 }
 
 TEST_CASE("ORB-SLAM2 settings: a TUM1-style file with distortion and defaults", "[dataset][settings]") {
@@ -156,7 +161,7 @@ TEST_CASE("ORB-SLAM2 settings: a TUM1-style file with distortion and defaults", 
   CHECK_FALSE(s.distortion.is_zero());
   CHECK(s.width_px == 0);  // not in the file
   CHECK(s.height_px == 0);
-  CHECK(s.defaulted_keys == std::vector<std::string>{"Camera.width", "Camera.height"});
+  CHECK(s.defaulted_keys == std::vector<std::string>{"Camera.width", "Camera.height", "cge.DepthSigmaPerMetre"});
   REQUIRE(s.notes.size() == 1);
   CHECK_THAT(s.notes[0], Contains("distortion"));
   CHECK(s.depth_map_factor == 5000.0);
@@ -169,9 +174,13 @@ TEST_CASE("ORB-SLAM2 settings: a TUM1-style file with distortion and defaults", 
   // Only the required keys: every optional one takes ORB-SLAM2's TUM default.
   write_text(file, minimal());
   const OrbSlam2Settings m = read_orbslam2_settings(file);
-  CHECK(m.defaulted_keys.size() == 12);  // k3, width, height, fps, bf, RGB, ThDepth, five ORBextractor keys
+  // k3, width, height, fps, bf, RGB, ThDepth, cge.DepthSigmaPerMetre, five ORBextractor keys
+  CHECK(m.defaulted_keys.size() == 13);
   CHECK(m.fps_hz == 30);
   CHECK(m.bf_px_m == 40);
+  // Without our key, ORB-SLAM2's depth weight: sigma_z = z^2 / bf at a one-pixel sigma.
+  CHECK_FALSE(m.depth_sigma_per_m_key.has_value());
+  CHECK(m.depth_sigma_per_m() == 1.0 / 40);
   CHECK(m.th_depth_baselines == 40);
   CHECK_FALSE(m.rgb_order.has_value());
   CHECK(m.orb.features == 1000);
@@ -221,6 +230,32 @@ TEST_CASE("ORB-SLAM2 settings: errors name the file, the key and its line", "[da
   CHECK_THAT(message(minimal("ORBextractor.iniThFAST: 300\n")), Contains("ORBextractor.iniThFAST"));
   CHECK_THAT(message(minimal("Camera.RGB: 2\n")), Contains("Camera.RGB"));
   CHECK_THAT(message(minimal("Camera.width: 640\n")), Contains(f + ":11: key Camera.width") && Contains("together"));
+  CHECK_THAT(message(minimal("cge.DepthSigmaPerMetre: 0\n")),
+             Contains(f + ":11: key cge.DepthSigmaPerMetre") && Contains("out of range"));
+}
+
+TEST_CASE("ORB-SLAM2 settings onto the pipeline's settings", "[dataset][settings]") {
+  TempDir tmp{"cge_test_dataset_settings"};
+  const fs::path file = tmp.path() / "camera.yaml";
+  write_text(file, minimal("Camera.bf: 50.0\nThDepth: 30.0\nCamera.fps: 15.0\n"));
+  const OrbSlam2Settings s = read_orbslam2_settings(file);
+  cge::slam::SystemSettings settings;
+  cge::PinholeIntrinsics<double> intrinsics;
+  cge::slam::apply_orbslam2_settings(s, intrinsics, settings);
+  CHECK(intrinsics.fx_px == 500.0);
+  CHECK(settings.frame.depth_units_per_metre == 1000.0);
+  CHECK(settings.frame.close_depth_m == Approx(30.0 * 50.0 / 500.0));
+  CHECK(settings.orbslam2_keyframes.max_frame_gap == 15);
+  // The depth weight of tracking, local BA and loop correction alike: 1 / bf without our key.
+  CHECK(settings.tracker.refinement_depth_sigma_per_m == 1.0 / 50);
+  CHECK(settings.local_mapping.depth_sigma_per_m == 1.0 / 50);
+  CHECK(settings.loop_correction.depth_sigma_per_m == 1.0 / 50);
+  write_text(file, minimal("cge.DepthSigmaPerMetre: 0.002\n"));
+  cge::slam::apply_orbslam2_settings(read_orbslam2_settings(file), intrinsics, settings);
+  CHECK(settings.tracker.refinement_depth_sigma_per_m == 0.002);
+  CHECK(settings.local_mapping.depth_sigma_per_m == 0.002);
+  CHECK(settings.loop_correction.depth_sigma_per_m == 0.002);
+  CHECK_NOTHROW(settings.validate());
 }
 
 TEST_CASE("ORB-SLAM2 settings: keypoint undistortion inverts the distortion model", "[dataset][settings][undistort]") {

@@ -185,6 +185,10 @@ OrbSlam2Settings read_orbslam2_settings(const fs::path& file) {
   r.require(s.th_depth_baselines > 0, "ThDepth", s.th_depth_baselines, "> 0");
   s.depth_map_factor = *r.real("DepthMapFactor", kRequired);
   r.require(s.depth_map_factor > 0, "DepthMapFactor", s.depth_map_factor, "> 0");
+  s.depth_sigma_per_m_key = r.real("cge.DepthSigmaPerMetre", kOptional);
+  if (s.depth_sigma_per_m_key) {
+    r.require(*s.depth_sigma_per_m_key > 0, "cge.DepthSigmaPerMetre", *s.depth_sigma_per_m_key, "> 0");
+  }
 
   OrbExtractorSettings& o = s.orb;
   o.features = r.integer("ORBextractor.nFeatures", kOptional).value_or(o.features);

@@ -222,6 +222,7 @@ std::string format_camera_yaml(const PinholeCamera& camera, double frame_rate_hz
   integer("Camera.RGB", 1);
   real("ThDepth", s.orb_close_depth_baselines);
   real("DepthMapFactor", camera.depth_units_per_metre);
+  real("cge.DepthSigmaPerMetre", s.depth_sigma_per_m);
   integer("ORBextractor.nFeatures", s.orb_features);
   real("ORBextractor.scaleFactor", s.orb_scale_factor);
   integer("ORBextractor.nLevels", s.orb_levels);

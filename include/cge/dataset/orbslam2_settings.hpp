@@ -52,6 +52,9 @@ struct OrbSlam2Settings {
   std::optional<bool> rgb_order;     ///< Camera.RGB: true = images are RGB, false = BGR; unset if absent
   double th_depth_baselines = 40;    ///< ThDepth: close/far depth threshold, in baselines
   double depth_map_factor = 5000;    ///< DepthMapFactor: depth image units per metre
+  /// cge.DepthSigmaPerMetre (our key; ORB-SLAM2 ignores it): depth standard deviation sigma_z =
+  /// value * z^2, 1/m, > 0; unset if absent (see depth_sigma_per_m()).
+  std::optional<double> depth_sigma_per_m_key;
   OrbExtractorSettings orb;          ///< ORBextractor.*
 
   std::string source;                       ///< the file read
@@ -62,6 +65,10 @@ struct OrbSlam2Settings {
   double baseline_m() const { return bf_px_m / camera.fx_px; }
   /// ORB-SLAM2's close/far depth threshold, metres (ThDepth * bf / fx).
   double close_depth_threshold_m() const { return th_depth_baselines * baseline_m(); }
+  /// The depth weight for tracking and bundle adjustment, sigma_z = value * z^2, 1/m: the file's
+  /// cge.DepthSigmaPerMetre, else ORB-SLAM2's own: it weighs depth as a virtual stereo coordinate
+  /// u_R = u - bf / z with the pixel's sigma, so sigma_z = sigma_px z^2 / bf (1 / bf at sigma_px 1).
+  double depth_sigma_per_m() const { return depth_sigma_per_m_key.value_or(1.0 / bf_px_m); }
   /// The 3 x 3 CV_64F camera matrix.
   cv::Mat camera_matrix() const;
 };

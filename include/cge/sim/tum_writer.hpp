@@ -53,6 +53,11 @@ struct TumWriterSettings {
   /// ORB-SLAM2 settings written to camera.yaml beside the intrinsics (their TUM3.yaml values).
   double orb_baseline_times_fx = 40.0;      ///< Camera.bf: virtual stereo baseline times fx, pixels x metres
   double orb_close_depth_baselines = 40.0;  ///< ThDepth: close/far threshold, in baselines
+  /// cge.DepthSigmaPerMetre: the depth weight the pipeline should give this sequence, sigma_z =
+  /// value * z^2, 1/m (ours: the rendered noise is the Kinect v1 model alone, without the
+  /// registration and timing errors of real frames; 0.003 is the weight the rendered presets were
+  /// measured with, docs/REAL_DATA.md). ORB-SLAM2 ignores keys it does not know.
+  double depth_sigma_per_m = 0.003;
   int orb_features = 1000;                  ///< ORBextractor.nFeatures
   double orb_scale_factor = 1.2;            ///< ORBextractor.scaleFactor
   int orb_levels = 8;                       ///< ORBextractor.nLevels

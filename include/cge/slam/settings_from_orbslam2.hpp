@@ -1,7 +1,8 @@
 #pragma once
 // What an ORB-SLAM2 RGB-D settings file (cge/dataset/orbslam2_settings.hpp) sets in the pipeline's
 // settings: the camera (intrinsics and lens distortion), the depth scale, the close/far depth
-// threshold, the ORB extractor and the baseline keyframe policy's frame gap.
+// threshold, the ORB extractor, the depth weight of tracking and bundle adjustment, and the baseline
+// keyframe policy's frame gap.
 #include <algorithm>
 #include <cmath>
 
@@ -25,6 +26,13 @@ inline void apply_orbslam2_settings(const dataset::OrbSlam2Settings& file, Pinho
   frame.orb.levels = file.orb.levels;
   frame.orb.initial_fast_threshold = file.orb.initial_fast_threshold;
   frame.orb.min_fast_threshold = file.orb.min_fast_threshold;
+  // Real Kinect frames carry depth errors beyond the sensor's noise (registration to the colour
+  // image, timing during fast motion): on the real fr1/rpy slice the tight rendered weight (0.003)
+  // flagged a fifth of the local BA's observations as outliers (docs/REAL_DATA.md).
+  const double depth_sigma_per_m = file.depth_sigma_per_m();
+  settings.tracker.refinement_depth_sigma_per_m = depth_sigma_per_m;
+  settings.local_mapping.depth_sigma_per_m = depth_sigma_per_m;
+  settings.loop_correction.depth_sigma_per_m = depth_sigma_per_m;
   // ORB-SLAM2's mMaxFrames is the frame rate.
   settings.orbslam2_keyframes.max_frame_gap = std::max(1, static_cast<int>(std::lround(file.fps_hz)));
 }
