@@ -3,12 +3,15 @@
 
 Renders every synthetic preset with a fixed seed (cge_sim), runs every mode of the reference
 pipeline on it (cge_slam), evaluates the runs (cge_eval), studies the entropy measures on the loop
-scenes (cge_loop_study), and writes RESULTS.md with its PNG figures. The suite only calls the
-command-line tools and reads the files they write, so every number here can be reproduced by hand
-with the commands listed in RESULTS.md.
+scenes (cge_loop_study), and writes RESULTS.md with its PNG figures. Given the ORB-SLAM2 peer
+(--orbslam2, the folder the peer kit's build.sh made), it also runs the original ORB-SLAM2 on the
+walking and sitting presets and on the real TUM slice, alternating with our runs where times are
+compared. The suite only calls the command-line tools and reads the files they write, so every
+number here can be reproduced by hand with the commands listed in RESULTS.md.
 
 Usage (docs/RESULTS.md):
     make_results.py --tools BUILD/examples --out docs [--work BUILD/results] [--quick]
+                    [--orbslam2 PEER_DIR [--orbslam2-run run.sh] [--orbslam2-runs 3]] [--real-data DIR|none]
 
 --quick runs short sequences: it checks that the suite works (CI), its numbers mean little.
 Exit codes: 0 success, 1 a tool failed (its command and message are printed), 2 bad arguments.
@@ -30,10 +33,24 @@ from functools import partial
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import results_plots  # noqa: E402  (beside this file)
+import results_peer  # noqa: E402  (beside this file)
+import results_plots  # noqa: E402
 import results_report  # noqa: E402
 
+# The peer kit and the real TUM slice live beside the project, in ../shared, when it is there.
+PROJECT_ROOT = Path(__file__).resolve().parents[2]
+DEFAULT_PEER_RUN = PROJECT_ROOT.parent / "shared" / "peers" / "orbslam2" / "run.sh"
+DEFAULT_REAL_DATA = PROJECT_ROOT.parent / "shared" / "data" / "tum_fr1_rpy_300"
+
 WALKING_PRESETS = ["walking_xyz", "walking_halfsphere", "walking_rpy", "walking_static"]
+LOW_DYNAMIC_PRESETS = ["sitting_xyz"]
+TRAJECTORY_PRESETS = WALKING_PRESETS + LOW_DYNAMIC_PRESETS  # every mode runs on these
+# The real slice has no people and no masks: our pipeline without dynamic handling, and YMK with
+# segmentation none (only the keyframe selector acts), as docs/REAL_DATA.md runs it.
+REAL_DATA_MODES = ["none", "YMK"]
+# Per-frame stages of cge_slam that ORB-SLAM2's TrackRGBD also covers (ORB extraction, tracking,
+# the keyframe decision); its local mapping and loop closing run in threads of their own.
+TRACKING_STAGES = ["features", "dynamic_filter", "tracking", "keyframe"]
 LOOP_PRESETS = ["loop_dynamic", "loop_structure_change"]
 MODES = ["none", "Y", "YM", "YMK"]
 # Loop scorings compared in Table 6: BoW only (ORB-SLAM2-like), the paper's CGE ranking, ours.
@@ -67,6 +84,19 @@ class Runner:
         self.work = work
         self.verbose = verbose
         self.commands: list[str] = []
+        # (absolute prefix, as shown) for the command log: the work folder is shown relative.
+        self.aliases: list[tuple[str, str]] = [(str(work) + "/", "")]
+
+    def shown(self, argv: list[str]) -> str:
+        text = " ".join(argv)
+        for prefix, alias in self.aliases:
+            text = text.replace(prefix, alias)
+        return text
+
+    def log(self, shown: str, log: list[str] | None = None) -> None:
+        (self.commands if log is None else log).append(shown)
+        if self.verbose:
+            print(f"  $ {shown}", flush=True)
 
     def tool(self, name: str) -> str:
         path = self.tools / name
@@ -77,10 +107,7 @@ class Runner:
     def run(self, name: str, *args: str, capture_json: bool = False, log: list[str] | None = None) -> dict | str:
         """Runs one tool; its command goes to `log` (a parallel task's own list) or the runner's."""
         argv = [self.tool(name), *map(str, args)]
-        shown = " ".join([name, *map(str, args)]).replace(str(self.work) + "/", "")
-        (self.commands if log is None else log).append(shown)
-        if self.verbose:
-            print(f"  $ {shown}", flush=True)
+        self.log(self.shown([name, *map(str, args)]), log)
         result = subprocess.run(argv, capture_output=True, text=True)
         if result.returncode != 0:
             tail = "\n".join(result.stderr.strip().splitlines()[-15:])
@@ -139,8 +166,8 @@ def slam(runner: Runner, log: list[str], sequence: Path, out: Path, *flags: str)
 
 
 def walking_runs(runner: Runner, plan: Plan, jobs: int) -> dict:
-    """Every walking preset in every mode; maps and aligned trajectories for the figures."""
-    sequences = {preset: render(runner, preset, plan.walking_frames, plan.seed) for preset in WALKING_PRESETS}
+    """Every walking and sitting preset in every mode; maps and aligned trajectories for the figures."""
+    sequences = {preset: render(runner, preset, plan.walking_frames, plan.seed) for preset in TRAJECTORY_PRESETS}
 
     def one(preset: str, mode: str, log: list[str]) -> dict:
         sequence = sequences[preset]
@@ -158,11 +185,90 @@ def walking_runs(runner: Runner, plan: Plan, jobs: int) -> dict:
                                          capture_json=True, log=log)
         return run
 
-    keys = [(preset, mode) for preset in WALKING_PRESETS for mode in MODES]
+    keys = [(preset, mode) for preset in TRAJECTORY_PRESETS for mode in MODES]
     runs = dict(zip(keys, runner.parallel([partial(one, *key) for key in keys], jobs)))
     for (preset, mode), run in runs.items():
         print(f"  {preset:20s} {mode:4s} ate {fmt_m(run['summary'].get('ate', {}).get('rmse_m'))}", flush=True)
     return runs
+
+
+def median(values: list[float]) -> float | None:
+    ordered = sorted(values)
+    n = len(ordered)
+    if n == 0:
+        return None
+    return ordered[n // 2] if n % 2 else 0.5 * (ordered[n // 2 - 1] + ordered[n // 2])
+
+
+def tracking_median_ms(timings: Path) -> float | None:
+    """Median over frames of the TRACKING_STAGES' summed time per frame (timings.csv)."""
+    per_frame = [sum(float(row[f"{stage}_ms"]) for stage in TRACKING_STAGES) for row in read_csv(timings)]
+    return median(per_frame)
+
+
+def our_timed_run(runner: Runner, dataset: Path, out: Path, mode: str, flags: list[str]) -> dict:
+    summary = slam(runner, runner.commands, dataset, out, "--mode", mode, *flags)
+    return {"summary": summary, "tracking_median_ms": tracking_median_ms(out / "timings.csv"),
+            "total_median_ms": summary.get("stages", {}).get("total", {}).get("median_ms"),
+            "trajectory": (out / "trajectory.txt").read_bytes()}
+
+
+def peer_run(runner: Runner, peer: results_peer.Peer, dataset: Path, out: Path) -> dict:
+    """One ORB-SLAM2 run, read back and evaluated; a failed run is recorded, not raised."""
+    argv = ["bash", str(peer.run_script), str(dataset), str(out)]
+    runner.log("ORB_PEER=PEER " + runner.shown(argv))
+    _, result = results_peer.run_peer(peer, dataset, out)
+    if result.returncode != 0:
+        tail = (result.stderr.strip().splitlines() or ["no message"])[-1]
+        return {"error": f"run.sh exit {result.returncode}: {tail}"}
+
+    def evaluate(kind: str, estimate: Path) -> dict:
+        return runner.run("cge_eval", kind, dataset / "groundtruth.txt", estimate, "--json", capture_json=True)
+
+    return results_peer.read_peer_run(out, evaluate)
+
+
+def compared_runs(runner: Runner, plan: Plan, peer: results_peer.Peer | None, peer_runs: int,
+                  real_data: Path | None, walking: dict) -> dict:
+    """ORB-SLAM2 and our pipeline on the same sequences, one run at a time and alternating (peer, then
+    ours), so that both see the same machine load when their times are compared. Ours is
+    deterministic: its repeated runs differ only in time, which `same_trajectory` checks."""
+    datasets = []  # (name, folder, our modes, our extra flags)
+    if peer is not None:
+        for preset in TRAJECTORY_PRESETS:
+            datasets.append((preset, render(runner, preset, plan.walking_frames, plan.seed), ["YMK"],
+                             ["--seed", str(plan.seed)]))
+    if real_data is not None:
+        datasets.append((real_data.name, real_data, REAL_DATA_MODES, ["--segmentation", "none", "--seed",
+                                                                      str(plan.seed)]))
+    rounds = peer_runs if peer is not None else 1
+    result: dict = {"peer": {}, "ours": {}, "rounds": rounds}
+    for name, folder, modes, flags in datasets:
+        peer_results = []
+        for i in range(1, rounds + 1):
+            if peer is not None:
+                run = peer_run(runner, peer, folder, runner.work / "runs" / name / f"orbslam2_{i}")
+                peer_results.append(run)
+                print(f"  {name:20s} ORB-SLAM2 run {i}: " + (run["error"] if "error" in run else
+                      f"ate {fmt_m(run.get('ate_rmse_m'))}, {run.get('keyframes')} keyframes, TrackRGBD median "
+                      f"{run.get('track_median_ms', float('nan')):.1f} ms"), flush=True)
+            for mode in modes:
+                ours = our_timed_run(runner, folder, runner.work / "runs" / name / f"timed_{mode}_{i}", mode, flags)
+                result["ours"].setdefault((name, mode), []).append(ours)
+        if peer is not None:
+            result["peer"][name] = {"runs": peer_results, "summary": results_peer.summarise(peer_results)}
+        for mode in modes:
+            timed = result["ours"][(name, mode)]
+            grid = walking.get((name, mode))
+            reference = timed[0]["trajectory"]
+            same = all(t["trajectory"] == reference for t in timed)
+            if grid is not None:
+                same = same and (runner.work / "runs" / name / mode / "trajectory.txt").read_bytes() == reference
+            for t in timed:
+                del t["trajectory"]  # bytes only for the check above
+            result["ours"][(name, mode)] = {"runs": timed, "same_trajectory": same,
+                                            "summary": timed[0]["summary"]}
+    return result
 
 
 def loop_runs(runner: Runner, plan: Plan, vocabulary: Path, jobs: int) -> dict:
@@ -231,12 +337,44 @@ def main() -> int:
     parser.add_argument("--jobs", type=int, default=min(os.cpu_count() or 1, 4),
                         help="tool runs at a time (each is single threaded; default: cores, at most 4)")
     parser.add_argument("--verbose", action="store_true", help="print every command")
+    parser.add_argument("--orbslam2", type=Path, metavar="PEER_DIR",
+                        help="the ORB-SLAM2 peer (the folder the peer kit's build.sh made); without it the "
+                             "ORB-SLAM2 columns say 'not run'")
+    parser.add_argument("--orbslam2-run", type=Path, default=DEFAULT_PEER_RUN, metavar="RUN_SH",
+                        help=f"the peer kit's run.sh (default: {DEFAULT_PEER_RUN})")
+    parser.add_argument("--orbslam2-runs", type=int, default=None,
+                        help="ORB-SLAM2 runs per sequence (it is not deterministic; default 3, 1 with --quick)")
+    parser.add_argument("--real-data", default=None, metavar="DIR|none",
+                        help="a real TUM folder our pipeline (and the peer) also run on; default "
+                             f"{DEFAULT_REAL_DATA} when it exists, none with --quick")
     args = parser.parse_args()
 
     plan = QUICK if args.quick else FULL
     if args.jobs < 1:
         print("make_results.py: --jobs must be at least 1", file=sys.stderr)
         return 2
+    peer_runs = args.orbslam2_runs if args.orbslam2_runs is not None else (1 if args.quick else 3)
+    if peer_runs < 1:
+        print("make_results.py: --orbslam2-runs must be at least 1", file=sys.stderr)
+        return 2
+    peer = None
+    if args.orbslam2 is not None:
+        problem = results_peer.check_peer(args.orbslam2.resolve(), args.orbslam2_run.resolve())
+        if problem:
+            print(f"make_results.py: {problem}", file=sys.stderr)
+            return 2
+        peer = results_peer.Peer(args.orbslam2.resolve(), args.orbslam2_run.resolve())
+    if args.real_data is None:
+        real_data = None if args.quick or not DEFAULT_REAL_DATA.is_dir() else DEFAULT_REAL_DATA
+    elif args.real_data == "none":
+        real_data = None
+    else:
+        real_data = Path(args.real_data).resolve()
+        missing = [f for f in ("rgb.txt", "depth.txt", "groundtruth.txt") if not (real_data / f).is_file()]
+        if missing:
+            print(f"make_results.py: --real-data {args.real_data}: no {', '.join(missing)} (a TUM RGB-D folder)",
+                  file=sys.stderr)
+            return 2
     out = args.out.resolve()
     work = (args.work or out.parent / "results-work").resolve()
     if work == out or work == out / "results":
@@ -245,6 +383,11 @@ def main() -> int:
     out.mkdir(parents=True, exist_ok=True)
     work.mkdir(parents=True, exist_ok=True)
     runner = Runner(args.tools.resolve(), work, args.verbose)
+    if peer is not None:
+        runner.aliases.append((str(peer.run_script), "run.sh"))
+    if real_data is not None:
+        shown = "../shared/data/" + real_data.name if real_data == DEFAULT_REAL_DATA.resolve() else str(real_data)
+        runner.aliases.insert(0, (str(real_data), shown))
 
     started = time.monotonic()
     steps: dict[str, float] = {}
@@ -262,6 +405,12 @@ def main() -> int:
         steps["walking runs"] = time.monotonic() - t
 
         t = time.monotonic()
+        if peer is not None or real_data is not None:
+            print("ORB-SLAM2 and ours, alternating" if peer is not None else "real data", flush=True)
+        compared = compared_runs(runner, plan, peer, peer_runs, real_data, walking)
+        steps["ORB-SLAM2 and compared runs"] = time.monotonic() - t
+
+        t = time.monotonic()
         print("loop scenes x loop scorings", flush=True)
         loops = loop_runs(runner, plan, vocabulary, args.jobs)
         steps["loop runs"] = time.monotonic() - t
@@ -277,8 +426,8 @@ def main() -> int:
     t = time.monotonic()
     figures_dir = out / "results"
     figures_dir.mkdir(exist_ok=True)
-    figures = results_plots.make_all(figures_dir, walking, loops, study, WALKING_PRESETS, MODES, LOOP_PRESETS,
-                                     LOOP_SCORINGS)
+    figures = results_plots.make_all(figures_dir, walking, loops, study, TRAJECTORY_PRESETS, MODES, LOOP_PRESETS,
+                                     LOOP_SCORINGS, compared["peer"])
     steps["figures"] = time.monotonic() - t
     steps["total"] = time.monotonic() - started
 
@@ -286,7 +435,9 @@ def main() -> int:
         plan=plan, quick=args.quick, walking=walking, loops=loops, study=study, figures=figures,
         figures_prefix=figures_dir.name, steps=steps, machine=machine_description(), jobs=args.jobs,
         commands=runner.commands, walking_presets=WALKING_PRESETS, modes=MODES, loop_presets=LOOP_PRESETS,
-        loop_scorings=LOOP_SCORINGS)
+        loop_scorings=LOOP_SCORINGS, low_dynamic_presets=LOW_DYNAMIC_PRESETS, compared=compared,
+        peer_ran=peer is not None, real_data=real_data.name if real_data is not None else None,
+        real_data_modes=REAL_DATA_MODES, tracking_stages=TRACKING_STAGES)
     report = out / "RESULTS.md"
     tmp = report.with_suffix(".md.tmp")
     tmp.write_text(results_report.render(context), encoding="utf-8")
