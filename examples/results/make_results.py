@@ -34,6 +34,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import results_peer  # noqa: E402  (beside this file)
+import results_stamps  # noqa: E402
 import results_plots  # noqa: E402
 import results_report  # noqa: E402
 
@@ -86,6 +87,9 @@ class Runner:
         self.commands: list[str] = []
         # (absolute prefix, as shown) for the command log: the work folder is shown relative.
         self.aliases: list[tuple[str, str]] = [(str(work) + "/", "")]
+        self.reuse = False  # --reuse: read back runs an earlier suite run made with the same tools and inputs
+        self.reused: list[str] = []
+        self.rendered: set[Path] = set()
 
     def shown(self, argv: list[str]) -> str:
         text = " ".join(argv)
@@ -153,15 +157,36 @@ def read_csv(path: Path) -> list[dict[str, str]]:
 
 
 def render(runner: Runner, preset: str, frames: int, seed: int) -> Path:
+    """Renders a preset once; a folder an earlier suite run rendered with the same cge_sim and
+    arguments is reused (the renderer is deterministic: same arguments, same bytes)."""
     out = runner.work / "sequences" / f"{preset}_{frames}_s{seed}"
-    if (out / "rgb.txt").is_file() and (out / "loops.txt").is_file():
-        return out  # the renderer is deterministic: same arguments, same bytes
-    runner.run("cge_sim", "--preset", preset, "--frames", frames, "--seed", seed, "--out", out, "--force")
+    args = ["--preset", preset, "--frames", str(frames), "--seed", str(seed), "--out", str(out), "--force"]
+    if out in runner.rendered:
+        return out
+    stamp = results_stamps.make(Path(runner.tool("cge_sim")), args, [])
+    if results_stamps.matches(out, stamp) and (out / "rgb.txt").is_file():
+        runner.log(runner.shown(["cge_sim", *args]))
+    else:
+        runner.run("cge_sim", *args)
+        results_stamps.write(out, stamp)
+    runner.rendered.add(out)
     return out
 
 
 def slam(runner: Runner, log: list[str], sequence: Path, out: Path, *flags: str) -> dict:
-    runner.run("cge_slam", "--dataset", sequence, "--out", out, "--force", *flags, log=log)
+    """One cge_slam run; with --reuse, a run an earlier suite run made with the same cge_slam, arguments
+    and inputs is read back instead."""
+    args = ["--dataset", str(sequence), "--out", str(out), "--force", *map(str, flags)]
+    inputs = [sequence] + [Path(str(f)) for f in flags
+                           if Path(str(f)).is_absolute() and Path(str(f)).is_file()]  # e.g. the vocabulary
+    stamp = results_stamps.make(Path(runner.tool("cge_slam")), args, inputs)
+    if runner.reuse and results_stamps.matches(out, stamp) and (out / "summary.json").is_file():
+        shown = runner.shown(["cge_slam", *args])
+        runner.log(shown, log)
+        runner.reused.append(shown)
+        return read_json(out / "summary.json")
+    runner.run("cge_slam", *args, log=log)
+    results_stamps.write(out, stamp)
     return read_json(out / "summary.json")
 
 
@@ -206,33 +231,85 @@ def tracking_median_ms(timings: Path) -> float | None:
     return median(per_frame)
 
 
-def our_timed_run(runner: Runner, dataset: Path, out: Path, mode: str, flags: list[str]) -> dict:
-    summary = slam(runner, runner.commands, dataset, out, "--mode", mode, *flags)
+def our_timed_run(runner: Runner, log: list[str], dataset: Path, out: Path, mode: str, flags: list[str]) -> dict:
+    runner.run("cge_slam", "--dataset", dataset, "--out", out, "--force", "--mode", mode, *flags, log=log)
+    summary = read_json(out / "summary.json")
     return {"summary": summary, "tracking_median_ms": tracking_median_ms(out / "timings.csv"),
             "total_median_ms": summary.get("stages", {}).get("total", {}).get("median_ms"),
             "trajectory": (out / "trajectory.txt").read_bytes()}
 
 
-def peer_run(runner: Runner, peer: results_peer.Peer, dataset: Path, out: Path) -> dict:
+def peer_run(runner: Runner, peer: results_peer.Peer, dataset: Path, out: Path, log: list[str] | None = None) -> dict:
     """One ORB-SLAM2 run, read back and evaluated; a failed run is recorded, not raised."""
     argv = ["bash", str(peer.run_script), str(dataset), str(out)]
-    runner.log("ORB_PEER=PEER " + runner.shown(argv))
+    runner.log("ORB_PEER=PEER " + runner.shown(argv), log)
     _, result = results_peer.run_peer(peer, dataset, out)
     if result.returncode != 0:
         tail = (result.stderr.strip().splitlines() or ["no message"])[-1]
         return {"error": f"run.sh exit {result.returncode}: {tail}"}
 
     def evaluate(kind: str, estimate: Path) -> dict:
-        return runner.run("cge_eval", kind, dataset / "groundtruth.txt", estimate, "--json", capture_json=True)
+        return runner.run("cge_eval", kind, dataset / "groundtruth.txt", estimate, "--json", capture_json=True,
+                          log=log)
 
     return results_peer.read_peer_run(out, evaluate)
 
 
+def compare_on(runner: Runner, peer: results_peer.Peer | None, rounds: int, name: str, folder: Path,
+               modes: list[str], flags: list[str], grid_trajectories: dict[str, Path]) -> dict:
+    """Rounds of (ORB-SLAM2, then ours in each mode) on one sequence; with --reuse, the rounds an earlier
+    suite run made with the same tools and inputs are read back instead (they were measured together)."""
+    folder_out = runner.work / "runs" / name
+    folder_out.mkdir(parents=True, exist_ok=True)
+    extra = {"rounds": rounds, "modes": modes, "flags": flags,
+             "grid": {m: results_stamps.file_digest(p) for m, p in grid_trajectories.items() if p.is_file()}}
+    inputs = [folder]
+    if peer is not None:
+        extra["peer"] = {"rgbd_tum": results_stamps.file_digest(peer.folder / results_peer.RGBD_TUM),
+                         "run.sh": results_stamps.file_digest(peer.run_script)}
+        inputs += sorted(peer.folder.glob("*.txt"))  # its vocabulary
+    stamp = results_stamps.make(Path(runner.tool("cge_slam")), [name], inputs, extra)
+    saved = folder_out / "compared.json"
+    if runner.reuse and results_stamps.matches(folder_out, stamp) and saved.is_file():
+        result = read_json(saved)
+        runner.commands.extend(result["commands"])
+        runner.reused.append(f"{name}: ORB-SLAM2 and our timed rounds")
+        print(f"  {name:20s} reused (same tools and inputs)", flush=True)
+        return result
+    log: list[str] = []
+    peer_results, ours = [], {m: [] for m in modes}
+    for i in range(1, rounds + 1):
+        if peer is not None:
+            run = peer_run(runner, peer, folder, folder_out / f"orbslam2_{i}", log)
+            peer_results.append(run)
+            print(f"  {name:20s} ORB-SLAM2 run {i}: " + (run["error"] if "error" in run else
+                  f"ate {fmt_m(run.get('ate_rmse_m'))}, {run.get('keyframes')} keyframes, TrackRGBD median "
+                  f"{run.get('track_median_ms', float('nan')):.1f} ms"), flush=True)
+        for mode in modes:
+            ours[mode].append(our_timed_run(runner, log, folder, folder_out / f"timed_{mode}_{i}", mode, flags))
+    result = {"peer": {"runs": peer_results, "summary": results_peer.summarise(peer_results)}
+              if peer is not None else None, "ours": {}, "commands": log}
+    for mode in modes:
+        timed = ours[mode]
+        reference = timed[0]["trajectory"]
+        same = all(t["trajectory"] == reference for t in timed)
+        if mode in grid_trajectories:
+            same = same and grid_trajectories[mode].read_bytes() == reference
+        for t in timed:
+            del t["trajectory"]  # bytes only for the check above
+        result["ours"][mode] = {"runs": timed, "same_trajectory": same, "summary": timed[0]["summary"]}
+    saved.write_text(json.dumps(result), encoding="utf-8")
+    results_stamps.write(folder_out, stamp)
+    runner.commands.extend(log)
+    return result
+
+
 def compared_runs(runner: Runner, plan: Plan, peer: results_peer.Peer | None, peer_runs: int,
-                  real_data: Path | None, walking: dict) -> dict:
+                  real_data: Path | None) -> dict:
     """ORB-SLAM2 and our pipeline on the same sequences, one run at a time and alternating (peer, then
     ours), so that both see the same machine load when their times are compared. Ours is
-    deterministic: its repeated runs differ only in time, which `same_trajectory` checks."""
+    deterministic: its repeated runs differ only in time, which `same_trajectory` checks, against the
+    table runs too."""
     datasets = []  # (name, folder, our modes, our extra flags)
     if peer is not None:
         for preset in TRAJECTORY_PRESETS:
@@ -244,30 +321,13 @@ def compared_runs(runner: Runner, plan: Plan, peer: results_peer.Peer | None, pe
     rounds = peer_runs if peer is not None else 1
     result: dict = {"peer": {}, "ours": {}, "rounds": rounds}
     for name, folder, modes, flags in datasets:
-        peer_results = []
-        for i in range(1, rounds + 1):
-            if peer is not None:
-                run = peer_run(runner, peer, folder, runner.work / "runs" / name / f"orbslam2_{i}")
-                peer_results.append(run)
-                print(f"  {name:20s} ORB-SLAM2 run {i}: " + (run["error"] if "error" in run else
-                      f"ate {fmt_m(run.get('ate_rmse_m'))}, {run.get('keyframes')} keyframes, TrackRGBD median "
-                      f"{run.get('track_median_ms', float('nan')):.1f} ms"), flush=True)
-            for mode in modes:
-                ours = our_timed_run(runner, folder, runner.work / "runs" / name / f"timed_{mode}_{i}", mode, flags)
-                result["ours"].setdefault((name, mode), []).append(ours)
-        if peer is not None:
-            result["peer"][name] = {"runs": peer_results, "summary": results_peer.summarise(peer_results)}
-        for mode in modes:
-            timed = result["ours"][(name, mode)]
-            grid = walking.get((name, mode))
-            reference = timed[0]["trajectory"]
-            same = all(t["trajectory"] == reference for t in timed)
-            if grid is not None:
-                same = same and (runner.work / "runs" / name / mode / "trajectory.txt").read_bytes() == reference
-            for t in timed:
-                del t["trajectory"]  # bytes only for the check above
-            result["ours"][(name, mode)] = {"runs": timed, "same_trajectory": same,
-                                            "summary": timed[0]["summary"]}
+        grid = {m: runner.work / "runs" / name / m / "trajectory.txt" for m in modes
+                if name in TRAJECTORY_PRESETS}
+        one = compare_on(runner, peer, rounds, name, folder, modes, flags, grid)
+        if one["peer"] is not None:
+            result["peer"][name] = one["peer"]
+        for mode, entry in one["ours"].items():
+            result["ours"][(name, mode)] = entry
     return result
 
 
@@ -347,6 +407,9 @@ def main() -> int:
     parser.add_argument("--real-data", default=None, metavar="DIR|none",
                         help="a real TUM folder our pipeline (and the peer) also run on; default "
                              f"{DEFAULT_REAL_DATA} when it exists, none with --quick")
+    parser.add_argument("--reuse", action="store_true",
+                        help="read back runs of an earlier suite run in the same --work folder that were made "
+                             "with the same tools, arguments and inputs (their times are from then)")
     args = parser.parse_args()
 
     plan = QUICK if args.quick else FULL
@@ -383,6 +446,7 @@ def main() -> int:
     out.mkdir(parents=True, exist_ok=True)
     work.mkdir(parents=True, exist_ok=True)
     runner = Runner(args.tools.resolve(), work, args.verbose)
+    runner.reuse = args.reuse
     if peer is not None:
         runner.aliases.append((str(peer.run_script), "run.sh"))
     if real_data is not None:
@@ -407,7 +471,7 @@ def main() -> int:
         t = time.monotonic()
         if peer is not None or real_data is not None:
             print("ORB-SLAM2 and ours, alternating" if peer is not None else "real data", flush=True)
-        compared = compared_runs(runner, plan, peer, peer_runs, real_data, walking)
+        compared = compared_runs(runner, plan, peer, peer_runs, real_data)
         steps["ORB-SLAM2 and compared runs"] = time.monotonic() - t
 
         t = time.monotonic()
@@ -437,7 +501,7 @@ def main() -> int:
         commands=runner.commands, walking_presets=WALKING_PRESETS, modes=MODES, loop_presets=LOOP_PRESETS,
         loop_scorings=LOOP_SCORINGS, low_dynamic_presets=LOW_DYNAMIC_PRESETS, compared=compared,
         peer_ran=peer is not None, real_data=real_data.name if real_data is not None else None,
-        real_data_modes=REAL_DATA_MODES, tracking_stages=TRACKING_STAGES)
+        real_data_modes=REAL_DATA_MODES, tracking_stages=TRACKING_STAGES, reused=runner.reused)
     report = out / "RESULTS.md"
     tmp = report.with_suffix(".md.tmp")
     tmp.write_text(results_report.render(context), encoding="utf-8")

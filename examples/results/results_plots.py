@@ -56,7 +56,7 @@ def trajectories(path: Path, walking: dict, preset: str, modes: list[str]) -> st
         ax.plot(gx, gy, color="black", linewidth=1.0, label="ground truth")
         ax.plot(ex, ey, color=MODE_COLOURS.get(mode, "blue"), linewidth=1.0, label="estimate")
         ate = walking[(preset, mode)]["summary"].get("ate", {}).get("rmse_m")
-        title = f"{preset}, mode {mode}"
+        title = f"{preset}, mode {SERIES_LABELS.get(mode, mode)}"
         if ate is not None:
             title += f"\nATE RMSE {ate * 1000:.1f} mm"
         ax.set_title(title, fontsize=9)

@@ -45,6 +45,7 @@ class Context:
     real_data: str | None = None  # name of the real TUM folder our pipeline ran on, if any
     real_data_modes: list = field(default_factory=list)
     tracking_stages: list = field(default_factory=list)
+    reused: list = field(default_factory=list)  # runs read back from an earlier suite run (--reuse)
 
 
 def is_number(v) -> bool:
@@ -153,6 +154,16 @@ def peer_note(ctx: Context) -> str:
             "relocalisation and loop closing, hardly for tracking.")
 
 
+def mapping_settings(ctx: Context) -> str:
+    """The mapping flags the runs used, as their summary.json records them."""
+    used = get(ctx.walking, (ctx.walking_presets[0], "none"), "summary", "mapping_settings") \
+        if ctx.walking_presets else None
+    if not used:
+        return ""
+    keys = ("map_maintenance", "local_ba", "keyframe_min_gap")
+    return "; these runs: " + ", ".join(f"{k} {used[k]}" for k in keys if k in used)
+
+
 def setting(ctx: Context) -> list[str]:
     p = ctx.plan
     lines = [
@@ -172,8 +183,8 @@ def setting(ctx: Context) -> list[str]:
         "the original program on the same rendered frames. " + peer_note(ctx) + " Mode `none` is our "
         "pipeline without dynamic handling: an ablation, not the paper's baseline. It has ORB-SLAM2's "
         "RGB-D keyframe rule, local mapping rules (point and keyframe culling, fusion) and local bundle "
-        "adjustment, run serially (docs/SLAM.md). Modes Y and YM keep that keyframe rule; YMK adds the "
-        "patch keyframe selector.",
+        "adjustment, run serially (docs/SLAM.md" + mapping_settings(ctx) + "). Modes Y and YM keep that "
+        "keyframe rule; YMK adds the patch keyframe selector.",
         "- **The paper's columns** (labelled \"" + PAPER + "\") are the paper's own numbers, transcribed from "
         "its Tables 2 to 6 and text: measured on the real TUM fr3 sequences and on its robot, with its "
         "hardware, not on our frames. They show the scale of the claim, not a like-for-like comparison.",
@@ -454,8 +465,12 @@ def map_section(ctx: Context) -> list[str]:
              "millimetres of pose error put static floor into it), and from the run's keyframes at the poses "
              "the map was built with (no alignment; a voxel a person pixel reached and no static pixel did). "
              "Integrity and fluctuation of the semantic entities (mode none has no segmentation, hence no "
-             "classes and no entities). ORB-SLAM2 builds no dense map (not measured); the paper's Figure 13 "
-             "shows maps, it gives no number.", ""]
+             "classes and no entities), as `cge_eval map` computes them from the `.ot` alone (docs/MAPS.md): "
+             "an entity is a 26-connected component of voxels of one class (at least 3 voxels) and its "
+             "axis-aligned box; per entity S_int = T_O / T_N (voxels of its class / occupied voxels in its "
+             "box); integrity Score_INT = sum T_N S_int / sum T_N, fluctuation Score_flu = "
+             "sqrt(sum T_N (S_int - Score_INT)^2 / sum T_N). ORB-SLAM2 builds no dense map (not measured); "
+             "the paper's Figure 13 shows maps, it gives no number.", ""]
     rows = []
     ghosts: dict[str, dict[str, object]] = {"ground truth": {}, "keyframe poses": {}}
     for mode in ctx.modes:
@@ -494,6 +509,22 @@ def paper_loops(preset: str, scoring: str) -> str:
     return f"{pct(precision, 0)} / {pct(recall, 1)} ({tp} TP, {fp} FP, {fn} FN)"
 
 
+def loop_settings_used(ctx: Context) -> list[str]:
+    """The loop closer's settings of each scoring, as the runs' summary.json recorded them."""
+    from results_plots import SCORING_LABELS
+
+    lines = []
+    for scoring in ctx.loop_scorings:
+        used = next((get(ctx.loops, (p, scoring), "summary", "loop_settings") for p in ctx.loop_presets
+                     if get(ctx.loops, (p, scoring), "summary", "loop_settings")), None)
+        if used:
+            shown = ", ".join(f"{k} {v}" for k, v in used.items() if k not in ("enabled", "vocabulary"))
+            lines.append(f"- {SCORING_LABELS.get(scoring, scoring)}: {shown}")
+    if not lines:
+        return []
+    return ["Settings of each row (summary.json `loop_settings`, docs/LOOP_CLOSING.md):", ""] + lines + [""]
+
+
 def loop_section(ctx: Context) -> list[str]:
     from results_plots import SCORING_LABELS
 
@@ -523,6 +554,7 @@ def loop_section(ctx: Context) -> list[str]:
     lines += table(["scene", "scoring", "keyframes queried", "correct/accepted", "precision", "query recall",
                     "event recall", "missed (by reason)", "corrections", "ATE [mm]", "tracked frames",
                     f"precision / recall ({PAPER.replace('real TUM', 'its robot')})"], rows)
+    lines += loop_settings_used(ctx)
     lines += ["The P-R curves apply a rising threshold to the score that gates each scoring (S_sum, or the "
               "BoW score for BoW only) of the loops the run accepted (`cge_eval loops --curve`); thresholds "
               "below the run's own gate are not explored, and the continuity check is not re-run per "
@@ -569,8 +601,14 @@ def study_section(ctx: Context) -> list[str]:
 def provenance(ctx: Context) -> list[str]:
     lines = ["## How these numbers were made", "",
              f"Machine: {ctx.machine}. Wall time per step: " +
-             ", ".join(f"{k} {v:.0f} s" for k, v in ctx.steps.items()) + ".", "",
-             "<details><summary>Every command the suite ran (paths relative to its work folder; PEER is the "
+             ", ".join(f"{k} {v:.0f} s" for k, v in ctx.steps.items()) + ".", ""]
+    if ctx.reused:
+        lines += [f"Read back from an earlier suite run in the same work folder, made with the same tools, "
+                  f"arguments and inputs (`--reuse`; their times are from then): {len(ctx.reused)} runs.", "",
+                  "<details><summary>The runs read back</summary>", "", "```"] + sorted(ctx.reused) + \
+                 ["```", "", "</details>", ""]
+    lines += [
+             "<details><summary>Every command behind these numbers (paths relative to the work folder; PEER is the "
              "ORB-SLAM2 peer folder, run.sh the peer kit's ../shared/peers/orbslam2/run.sh)</summary>", "",
              "```"]
     lines += ctx.commands

@@ -224,6 +224,64 @@ class ReportTables(unittest.TestCase):
         self.assertEqual((kf[6], kf[7]), ("49.4 %", "**not met**"))  # 1 - 40/79
 
 
+class Reuse(unittest.TestCase):
+    """Stamps: a run is read back only when the tool's bytes, its arguments and its inputs' bytes match."""
+
+    def setUp(self):
+        self.make_results, _, _ = suite_modules()
+        import results_stamps  # noqa: E402
+        self.stamps = results_stamps
+        self.tmp = tempfile.TemporaryDirectory()
+        self.dir = Path(self.tmp.name)
+        self.tools = self.dir / "tools"
+        self.tools.mkdir()
+        self.calls = self.dir / "calls.txt"
+        self.write_tool("v1")
+        self.sequence = self.dir / "sequence"
+        (self.sequence / "rgb").mkdir(parents=True)
+        (self.sequence / "rgb" / "0.png").write_bytes(b"frame")
+        (self.sequence / "rgb.txt").write_text("0 rgb/0.png\n", encoding="utf-8")
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def write_tool(self, version: str) -> None:
+        """A stand-in cge_slam: logs its call, writes summary.json into --out (the argument after it)."""
+        tool = self.tools / "cge_slam"
+        tool.write_text(f"#!/bin/sh\n# {version}\necho call >> {self.calls}\n"
+                        'while [ "$1" != "--out" ]; do shift; done\nmkdir -p "$2"\n'
+                        'echo \'{"frames": 1}\' > "$2/summary.json"\n', encoding="utf-8")
+        tool.chmod(0o755)
+
+    def run_slam(self, reuse: bool, mode: str = "YMK") -> int:
+        runner = self.make_results.Runner(self.tools, self.dir / "work", False)
+        runner.reuse = reuse
+        summary = self.make_results.slam(runner, runner.commands, self.sequence, self.dir / "work" / "out", "--mode",
+                                         mode)
+        self.assertEqual(summary, {"frames": 1})
+        self.assertEqual(len(runner.commands), 1)  # logged whether run or read back
+        return len(self.calls.read_text(encoding="utf-8").splitlines())
+
+    def test_reused_only_when_everything_matches(self):
+        self.assertEqual(self.run_slam(reuse=True), 1)
+        self.assertEqual(self.run_slam(reuse=True), 1)  # same tool, arguments, inputs: read back
+        self.assertEqual(self.run_slam(reuse=False), 2)  # without --reuse: run again
+        self.assertEqual(self.run_slam(reuse=True, mode="YM"), 3)  # other arguments
+        self.assertEqual(self.run_slam(reuse=True, mode="YM"), 3)
+        (self.sequence / "rgb" / "0.png").write_bytes(b"frame!")  # an input's bytes changed
+        self.assertEqual(self.run_slam(reuse=True, mode="YM"), 4)
+        self.write_tool("v2")  # the tool changed
+        self.assertEqual(self.run_slam(reuse=True, mode="YM"), 5)
+        self.assertEqual(self.run_slam(reuse=True, mode="YM"), 5)
+
+    def test_folder_digest_is_content(self):
+        before = self.stamps.input_digest(self.sequence)
+        (self.sequence / self.stamps.STAMP).write_text("anything", encoding="utf-8")
+        self.assertEqual(self.stamps.input_digest(self.sequence), before)  # the stamp itself does not count
+        (self.sequence / "depth.txt").write_text("", encoding="utf-8")
+        self.assertNotEqual(self.stamps.input_digest(self.sequence), before)
+
+
 class Refusals(unittest.TestCase):
     def run_suite(self, *extra: str) -> subprocess.CompletedProcess:
         with tempfile.TemporaryDirectory() as tmp:
