@@ -454,6 +454,7 @@ def main() -> int:
         runner.aliases.insert(0, (str(real_data), shown))
 
     started = time.monotonic()
+    load_at_start = os.getloadavg()[0]
     steps: dict[str, float] = {}
     try:
         t = time.monotonic()
@@ -497,7 +498,9 @@ def main() -> int:
 
     context = results_report.Context(
         plan=plan, quick=args.quick, walking=walking, loops=loops, study=study, figures=figures,
-        figures_prefix=figures_dir.name, steps=steps, machine=machine_description(), jobs=args.jobs,
+        figures_prefix=figures_dir.name, steps=steps, jobs=args.jobs,
+        machine=f"{machine_description()}; load average (1 min) {load_at_start:.1f} at the start of the suite, "
+                f"{os.getloadavg()[0]:.1f} at its end",
         commands=runner.commands, walking_presets=WALKING_PRESETS, modes=MODES, loop_presets=LOOP_PRESETS,
         loop_scorings=LOOP_SCORINGS, low_dynamic_presets=LOW_DYNAMIC_PRESETS, compared=compared,
         peer_ran=peer is not None, real_data=real_data.name if real_data is not None else None,

@@ -522,7 +522,9 @@ def loop_settings_used(ctx: Context) -> list[str]:
             lines.append(f"- {SCORING_LABELS.get(scoring, scoring)}: {shown}")
     if not lines:
         return []
-    return ["Settings of each row (summary.json `loop_settings`, docs/LOOP_CLOSING.md):", ""] + lines + [""]
+    return ["Settings of each row, as the runs' summary.json `loop_settings` records them; the rest are "
+            "`LoopCloserSettings`' defaults, which are not all the paper's (docs/LOOP_CLOSING.md, \"What the "
+            "results' rows use\": e.g. normalised exponents where the paper's are raw):", ""] + lines + [""]
 
 
 def loop_section(ctx: Context) -> list[str]:
