@@ -3,8 +3,9 @@
 //   trajectory.txt  every tracked frame, TUM format (T_world_camera)
 //   keyframes.txt   the keyframes, TUM format
 //   loops.csv       the loop closer's decisions (header only when loop closing is off)
-//   loops.txt       (without --dataset) the ground-truth loops of the rendered sequence, for
-//                   cge_eval loops
+//   loops.txt       (without --dataset, at most kMaxLoopTruthFrames frames) the ground-truth loops
+//                   of the rendered sequence whose query is a keyframe the loop closer queried,
+//                   for cge_eval loops
 //   frames.csv      per frame: tracking state, features, dynamic labels, matches, keyframe, and the
 //                   keypoints on moving bodies (with ground truth: synthetic masks/ or rendered)
 //   timings.csv     per frame and stage, milliseconds
@@ -108,6 +109,8 @@ constexpr const char* kVocabularyPresetOtherwise = "walking_xyz";  // when walki
 constexpr int kVocabularyPresetFrames = 300;
 constexpr int kVocabularyImages = 20;
 constexpr const char* kNoVocabulary = "none";  // --vocabulary none: loop closing off
+// Rendered runs longer than this get no ground-truth loops (RenderedSource::ground_truth_loops).
+constexpr int kMaxLoopTruthFrames = 1800;
 
 cge_tool::ProgressBar progress_bar{kProgram};  // drawn only on a terminal
 
@@ -381,8 +384,12 @@ class FrameSource {
   virtual std::vector<cge::SegmentedInstance> instances(int /*index*/) { return {}; }
   /// Ground-truth poses (timestamp, T_world_camera), when known.
   virtual std::vector<std::pair<double, Eigen::Isometry3d>> ground_truth() const { return {}; }
-  /// Ground-truth loops, when known (std::nullopt: none to evaluate against).
-  virtual std::optional<std::vector<cge::metrics::GroundTruthLoop>> ground_truth_loops() const { return std::nullopt; }
+  /// Ground-truth loops, when known (std::nullopt: none to evaluate against). `queries`: the stamps
+  /// (as "%.6f") of the keyframes the loop closer queried; a source may keep only their loops.
+  virtual std::optional<std::vector<cge::metrics::GroundTruthLoop>> ground_truth_loops(
+      const std::set<std::string>& /*queries*/) const {
+    return std::nullopt;
+  }
 };
 
 class DatasetSource final : public FrameSource {
@@ -395,7 +402,10 @@ class DatasetSource final : public FrameSource {
       : sequence_(sequence), frames_(frames), moving_masks_(std::move(moving_masks)) {
     if (!loops_file.empty()) loops_ = cge::metrics::read_ground_truth_loops_file(loops_file.string());
   }
-  std::optional<std::vector<cge::metrics::GroundTruthLoop>> ground_truth_loops() const override { return loops_; }
+  std::optional<std::vector<cge::metrics::GroundTruthLoop>> ground_truth_loops(
+      const std::set<std::string>& /*queries*/) const override {
+    return loops_;  // the user's file as it is, as cge_eval loops reads it
+  }
   std::vector<std::pair<double, Eigen::Isometry3d>> ground_truth() const override {
     std::vector<std::pair<double, Eigen::Isometry3d>> gt;
     for (const auto& p : sequence_.ground_truth()) gt.emplace_back(p.timestamp_s, p.T_world_camera);
@@ -464,13 +474,25 @@ class RenderedSource final : public FrameSource {
     }
     return gt;
   }
-  /// The rule of the loop scenes' loops.txt (cge::sim::ground_truth_loops, its default settings:
-  /// back within 0.3 m and 20 degrees after at least 2 m of travel), applied to the rendered poses.
-  std::optional<std::vector<cge::metrics::GroundTruthLoop>> ground_truth_loops() const override {
+  /// The loop scenes' own ground truth; for the other presets the same rule (cge::sim::
+  /// ground_truth_loops, its default settings: back within 0.3 m and 20 degrees after at least 2 m
+  /// of travel) applied to the rendered poses. Only the loops of the queried keyframes are kept: on
+  /// a camera that stays in one place (walking_xyz) almost every pair of distant frames is a loop.
+  /// The pairs grow with the square of the length, so beyond kMaxLoopTruthFrames frames (at most
+  /// 1.6 million pairs, 13 MB while they are filtered) there is no ground truth.
+  std::optional<std::vector<cge::metrics::GroundTruthLoop>> ground_truth_loops(
+      const std::set<std::string>& queries) const override {
     const cge::sim::SequenceSpec& spec = renderer_.spec();
+    if (spec.T_world_camera.size() > static_cast<std::size_t>(kMaxLoopTruthFrames)) return std::nullopt;
     const auto stamp = [&spec](int i) { return spec.start_timestamp_s + static_cast<double>(i) / spec.frame_rate_hz; };
+    const bool loop_scene = spec.name.rfind("loop_", 0) == 0;
+    const std::vector<cge::sim::LoopPair> pairs =
+        loop_scene ? spec.loops : cge::sim::ground_truth_loops(spec.T_world_camera);
     std::vector<cge::metrics::GroundTruthLoop> loops;
-    for (const cge::sim::LoopPair& p : cge::sim::ground_truth_loops(spec.T_world_camera)) {
+    char text[32];
+    for (const cge::sim::LoopPair& p : pairs) {
+      std::snprintf(text, sizeof text, "%.6f", stamp(p.query_frame));
+      if (queries.count(text) == 0) continue;
       cge::metrics::GroundTruthLoop l;
       l.query_timestamp_s = stamp(p.query_frame);
       l.match_timestamp_s = stamp(p.match_frame);
@@ -985,7 +1007,13 @@ int run(Options opt) {
   out.write("loops.csv", [&](std::ostream& f) { f << loops_csv.str(); });
   // The loop decisions against the ground-truth loops, read back from loops.csv as cge_eval loops
   // reads the file (same stamps, same numbers).
-  const std::optional<std::vector<cge::metrics::GroundTruthLoop>> gt_loops = source->ground_truth_loops();
+  std::set<std::string> queried;
+  for (const cge::slam::LoopRecord& l : system.loops()) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6f", l.query_timestamp_s);
+    queried.insert(text);
+  }
+  const std::optional<std::vector<cge::metrics::GroundTruthLoop>> gt_loops = source->ground_truth_loops(queried);
   std::optional<cge::metrics::LoopEvaluation> loop_evaluation;
   if (gt_loops && loop_closing) {
     std::istringstream rows(loops_csv.str());
@@ -1036,7 +1064,13 @@ int run(Options opt) {
   print_line("loop_queries", static_cast<double>(system.loops().size()));
   print_line("loops_accepted", summary["loops"]["accepted"].get<double>());
   print_line("loop_corrections", system.loop_corrections());
-  if (loop_evaluation) print_loop_evaluation(system.loops(), *gt_loops, gt, *loop_evaluation);
+  if (loop_evaluation) {
+    print_loop_evaluation(system.loops(), *gt_loops, gt, *loop_evaluation);
+  } else if (loop_closing && opt.dataset.empty()) {
+    std::printf("loop_evaluation skipped: more than %d rendered frames (ground-truth loops grow with the square of "
+                "the length)\n",
+                kMaxLoopTruthFrames);
+  }
   if (!summary["dynamic_leak"]["rate"].is_null()) {
     print_line("dynamic_leak_rate", summary["dynamic_leak"]["rate"].get<double>());
   }
