@@ -256,7 +256,7 @@ def peer_run(runner: Runner, peer: results_peer.Peer, dataset: Path, out: Path, 
 
 
 def compare_on(runner: Runner, peer: results_peer.Peer | None, rounds: int, name: str, folder: Path,
-               modes: list[str], flags: list[str], grid_trajectories: dict[str, Path]) -> dict:
+               modes: list[str], flags: list[str], grid_trajectories: dict[str, Path], commands: list[str]) -> dict:
     """Rounds of (ORB-SLAM2, then ours in each mode) on one sequence; with --reuse, the rounds an earlier
     suite run made with the same tools and inputs are read back instead (they were measured together)."""
     folder_out = runner.work / "runs" / name
@@ -272,7 +272,7 @@ def compare_on(runner: Runner, peer: results_peer.Peer | None, rounds: int, name
     saved = folder_out / "compared.json"
     if runner.reuse and results_stamps.matches(folder_out, stamp) and saved.is_file():
         result = read_json(saved)
-        runner.commands.extend(result["commands"])
+        commands.extend(result["commands"])
         runner.reused.append(f"{name}: ORB-SLAM2 and our timed rounds")
         print(f"  {name:20s} reused (same tools and inputs)", flush=True)
         return result
@@ -300,16 +300,16 @@ def compare_on(runner: Runner, peer: results_peer.Peer | None, rounds: int, name
         result["ours"][mode] = {"runs": timed, "same_trajectory": same, "summary": timed[0]["summary"]}
     saved.write_text(json.dumps(result), encoding="utf-8")
     results_stamps.write(folder_out, stamp)
-    runner.commands.extend(log)
+    commands.extend(log)
     return result
 
 
 def compared_runs(runner: Runner, plan: Plan, peer: results_peer.Peer | None, peer_runs: int,
-                  real_data: Path | None) -> dict:
-    """ORB-SLAM2 and our pipeline on the same sequences, one run at a time and alternating (peer, then
-    ours), so that both see the same machine load when their times are compared. Ours is
-    deterministic: its repeated runs differ only in time, which `same_trajectory` checks, against the
-    table runs too."""
+                  real_data: Path | None, jobs: int) -> dict:
+    """ORB-SLAM2 and our pipeline on the same sequences, alternating on each sequence (peer, then ours,
+    per round), so that both see the same machine load when their times are compared; `jobs`
+    sequences at a time. Ours is deterministic: its repeated runs differ only in time, which
+    `same_trajectory` checks, against the table runs too."""
     datasets = []  # (name, folder, our modes, our extra flags)
     if peer is not None:
         for preset in TRAJECTORY_PRESETS:
@@ -320,10 +320,12 @@ def compared_runs(runner: Runner, plan: Plan, peer: results_peer.Peer | None, pe
                                                                       str(plan.seed)]))
     rounds = peer_runs if peer is not None else 1
     result: dict = {"peer": {}, "ours": {}, "rounds": rounds}
+    tasks = []
     for name, folder, modes, flags in datasets:
         grid = {m: runner.work / "runs" / name / m / "trajectory.txt" for m in modes
                 if name in TRAJECTORY_PRESETS}
-        one = compare_on(runner, peer, rounds, name, folder, modes, flags, grid)
+        tasks.append(partial(compare_on, runner, peer, rounds, name, folder, modes, flags, grid))
+    for (name, _, _, _), one in zip(datasets, runner.parallel(tasks, jobs)):
         if one["peer"] is not None:
             result["peer"][name] = one["peer"]
         for mode, entry in one["ours"].items():
@@ -472,7 +474,7 @@ def main() -> int:
         t = time.monotonic()
         if peer is not None or real_data is not None:
             print("ORB-SLAM2 and ours, alternating" if peer is not None else "real data", flush=True)
-        compared = compared_runs(runner, plan, peer, peer_runs, real_data)
+        compared = compared_runs(runner, plan, peer, peer_runs, real_data, args.jobs)
         steps["ORB-SLAM2 and compared runs"] = time.monotonic() - t
 
         t = time.monotonic()

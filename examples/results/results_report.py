@@ -415,9 +415,9 @@ def compared_timing(ctx: Context) -> list[str]:
              "ORB-SLAM2's median TrackRGBD time per frame (its rgbd_tum log: ORB extraction, tracking, the "
              "keyframe decision; local mapping and loop closing run in threads of their own) beside ours: the "
              f"median over frames of {stages} (the same work, serial), and our serial total per frame, which "
-             "adds the segmentation input and the local mapping that ORB-SLAM2 runs in its own thread. The runs "
-             "alternate on one machine (ORB-SLAM2, then ours, per round, nothing else from the suite "
-             "running), so both see the same load; mean [min-max] over the rounds. Our repeated runs must give "
+             "adds the segmentation input and the local mapping that ORB-SLAM2 runs in its own thread. On each "
+             "sequence the runs alternate (ORB-SLAM2, then ours, per round), so both see the same load; "
+             f"{ctx.jobs} sequences at a time. Mean [min-max] over the rounds. Our repeated runs must give "
              "the same trajectory (ours is deterministic): the last column checks it, against the table runs "
              "above too.", ""]
     rows = []
