@@ -282,6 +282,17 @@ class Reuse(unittest.TestCase):
         self.assertNotEqual(self.stamps.input_digest(self.sequence), before)
 
 
+class LoopTarget(unittest.TestCase):
+    def test_marks(self):
+        _, _, report = suite_modules()
+        self.assertEqual(report.loop_target({"precision": 1.0, "event_recall": 1.0}), "met")
+        self.assertEqual(report.loop_target({"precision": 1.0, "event_recall": 0.875}), "**not met**")
+        self.assertEqual(report.loop_target({"precision": 0.98, "event_recall": 1.0}), "**not met**")
+        self.assertEqual(report.loop_target({"precision": None, "event_recall": 1.0}), "n/a")
+        self.assertEqual(report.paper_loops("loop_dynamic", "bow_only"), "100 % / 75.0 % (6 TP, 0 FP, 2 FN)")
+        self.assertEqual(report.paper_loops("loop_dynamic", "combined"), "not given")
+
+
 class Refusals(unittest.TestCase):
     def run_suite(self, *extra: str) -> subprocess.CompletedProcess:
         with tempfile.TemporaryDirectory() as tmp:
