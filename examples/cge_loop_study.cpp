@@ -1,14 +1,16 @@
 // cge_loop_study: the study of the entropy measures (issue 7 item 3) on a synthetic loop sequence.
 //
 //   cge_loop_study --dataset DIR --out DIR [--force] [--step 3] [--min-gap-frames 30] [--alpha 0.5]
-//                  [--collapse-tolerance-bits 1] [--mode YMK] [--seed 0]
+//                  [--collapse-tolerance-bits 1] [--mode YMK] [--seed 0] [--ties all|mean|min]
 //
 // For every step-th frame of DIR (a cge_sim folder: rgb/, depth/, masks/ with instances.csv,
 // camera.yaml, loops.txt) it makes what the loop closer sees of a keyframe: ORB features and
 // static labels from cge::slam::FrameMaker (the run's --mode and --seed, as cge_slam), with the
 // exact ground-truth masks of masks/ and their `moving` flag as the dynamic instances; the graph
 // the LoopCloser builds (own_mask_graph) and the degree-degree entropy with raw and with normalised
-// exponent scaling at --alpha (the LoopCloser's other settings at their defaults). Writes into --out:
+// exponent scaling at --alpha, tied shortest paths counted by --ties (TieMode; all, the default, is the
+// LoopCloser's; min is closest to the paper's rule), the LoopCloser's other settings at their
+// defaults. Writes into --out:
 //   frames.csv  frame,timestamp,vertices,edges,entropy_raw_bits,entropy_normalised_bits,
 //               log2_vertices,collapsed_raw,collapsed_normalised
 //   pairs.csv   query,match,revisit,s_sum_raw,s_sum_normalised (every pair of studied frames at
@@ -81,11 +83,19 @@ struct Options {
   bool force = false;
   int step = 3;                        ///< study every step-th frame
   int min_gap_frames = 30;             ///< pairs at least this many frames apart
-  double alpha = 0.5;                  ///< base of the functional alpha^E (paper: 0.5)
+  double alpha = 0.5;                  ///< base of the functional alpha^E (DegreeDegreeSettings' default)
   double collapse_tolerance_bits = 1;  ///< collapsed when H <= this (perplexity <= 2 at 1 bit)
   std::string mode = "YMK";            ///< dynamic handling of the labels, as cge_slam
   std::uint64_t seed = 0;              ///< seed of the MAD samples, as cge_slam
+  std::string ties = "all";            ///< TieMode of the degree sums: all, mean or min
 };
+
+cge::TieMode parse_ties(const std::string& name) {
+  if (name == "all") return cge::TieMode::all;
+  if (name == "mean") return cge::TieMode::mean;
+  if (name == "min") return cge::TieMode::min;
+  throw UsageError("--ties: '" + name + "' is not all, mean or min");
+}
 
 /// One studied frame: its graph's size and entropies under both scalings (computed once).
 struct StudiedFrame {
@@ -230,6 +240,7 @@ int run(const Options& opt) {
   // ---- per frame: the LoopCloser's graph and both entropies (each frame once) ------------------
   cge::slam::LoopCloserSettings raw_settings;
   raw_settings.degree_entropy.alpha = opt.alpha;
+  raw_settings.degree_entropy.ties = parse_ties(opt.ties);
   raw_settings.exponent_scaling = cge::ScalingKind::raw;
   cge::slam::LoopCloserSettings normalised_settings = raw_settings;
   normalised_settings.exponent_scaling = cge::ScalingKind::normalised_mean;
@@ -358,7 +369,7 @@ int run(const Options& opt) {
   summary["settings"] = {{"step", opt.step},    {"min_gap_frames", opt.min_gap_frames},
                          {"alpha", opt.alpha},  {"collapse_tolerance_bits", opt.collapse_tolerance_bits},
                          {"mode", opt.mode},    {"seed", opt.seed},
-                         {"sequence_frames", n}};
+                         {"ties", opt.ties},    {"sequence_frames", n}};
   summary["frames"] = frames.size();
   summary["frames_with_graph"] = with_graph;
   summary["pairs"] = pairs.size();
@@ -408,6 +419,11 @@ int main(int argc, char** argv) {
   app.add_option("--mode", opt.mode, "dynamic labelling as cge_slam: none, Y, YM, YMK")->capture_default_str();
   app.add_option("--seed", opt.seed, "seed of the MAD samples (as cge_slam --seed)")
       ->check(cge_tool::seed_check())
+      ->capture_default_str();
+  app.add_option("--ties", opt.ties,
+                 "tied shortest paths in the degree sums: all (every path, the LoopCloser's default), mean (one "
+                 "averaged path per node) or min (the path with the smallest sum, closest to the paper's rule)")
+      ->check(CLI::IsMember({"all", "mean", "min"}))
       ->capture_default_str();
   if (const int exit_code = cge_tool::parse_command_line(app, argc, argv, kProgram); exit_code >= 0) return exit_code;
   return cge_tool::run_reporting_errors(kProgram, &progress_bar, [&] { return run(opt); });

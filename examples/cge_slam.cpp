@@ -1,14 +1,21 @@
-// cge_slam: the reference pipeline on an RGB-D sequence (TUM layout) or, without --dataset, on the
-// walking_xyz synthetic preset rendered in memory. Writes into --out:
+// cge_slam: the reference pipeline on an RGB-D sequence (TUM layout) or, without --dataset, on a
+// synthetic preset rendered in memory (--preset, walking_xyz by default). Writes into --out:
 //   trajectory.txt  every tracked frame, TUM format (T_world_camera)
 //   keyframes.txt   the keyframes, TUM format
-//   loops.csv       the loop closer's decisions (with --vocabulary; header only without it)
+//   loops.csv       the loop closer's decisions (header only when loop closing is off)
+//   loops.txt       (without --dataset, at most kMaxLoopTruthFrames frames) the ground-truth loops
+//                   of the rendered sequence whose query is a keyframe the loop closer queried,
+//                   for cge_eval loops
 //   frames.csv      per frame: tracking state, features, dynamic labels, matches, keyframe, and the
 //                   keypoints on moving bodies (with ground truth: synthetic masks/ or rendered)
 //   timings.csv     per frame and stage, milliseconds
 //   summary.json    counts, the run's settings (loop_settings), the dynamic-feature leak rate
 //                   (dynamic_leak) and mean/median time per stage
 //   groundtruth.txt (without --dataset) the rendered poses, for cge_eval
+// Loop closing needs a vocabulary: --vocabulary FILE, or, without --dataset, one trained here on
+// frames of another rendered preset (never the evaluated frames; --vocabulary none switches loop
+// closing off). With ground-truth loops (rendered, or the dataset's loops.txt) the loop decisions
+// are evaluated as cge_eval loops does (precision, query and event recall) and printed.
 // trajectory.txt, keyframes.txt, loops.csv, frames.csv and groundtruth.txt are deterministic (same
 // inputs and seed: same bytes); timings.csv and the `stages` object of summary.json are
 // measurements and differ from run to run.
@@ -60,9 +67,14 @@
 #include "cge/mapping/map_image.hpp"
 #include "cge/mapping/semantic_map_builder.hpp"
 #include "cge/metrics/ate.hpp"
+#include "cge/metrics/ground_truth_loops_io.hpp"
+#include "cge/metrics/loop_precision_recall.hpp"
+#include "cge/metrics/loop_queries_io.hpp"
 #include "cge/metrics/rpe.hpp"
 #include "cge/segmentation/coco_classes.hpp"
 #include "cge/segmentation/precomputed_mask_reader.hpp"
+#include "cge/sim/frame_source.hpp"
+#include "cge/sim/loops.hpp"
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
 #include "cge/sim/segmentation_error_model.hpp"
@@ -72,6 +84,7 @@
 #include "cge/slam/output_files.hpp"
 #include "cge/slam/settings_from_orbslam2.hpp"
 #include "cge/slam/system.hpp"
+#include "cge/slam/vocabulary_training.hpp"
 
 #include "tool_support.hpp"
 
@@ -88,6 +101,16 @@ using cge_tool::kExitOk;
 constexpr const char* kProgram = "cge_slam";
 constexpr const char* kDefaultPreset = "walking_xyz";
 constexpr int kDefaultPresetFrames = 300;  // 10 s at 30 fps when --frames is not given
+// The vocabulary of a rendered run without --vocabulary: another preset of the same room (another
+// camera path, other walkers, another seed), so the evaluated frames never train it; 20 images
+// spread over 10 s of it, k = 10, L = 4 (about 9 000 words, as cge_vocab's default).
+constexpr const char* kVocabularyPreset = "walking_halfsphere";
+constexpr const char* kVocabularyPresetOtherwise = "walking_xyz";  // when walking_halfsphere is evaluated
+constexpr int kVocabularyPresetFrames = 300;
+constexpr int kVocabularyImages = 20;
+constexpr const char* kNoVocabulary = "none";  // --vocabulary none: loop closing off
+// Rendered runs longer than this get no ground-truth loops (RenderedSource::ground_truth_loops).
+constexpr int kMaxLoopTruthFrames = 1800;
 
 cge_tool::ProgressBar progress_bar{kProgram};  // drawn only on a terminal
 
@@ -101,6 +124,7 @@ std::string default_temporal_filter() {
 
 struct Options {
   std::string dataset;
+  std::string preset = kDefaultPreset;  // rendered when there is no --dataset
   std::string mode = "YMK";
   std::string segmentation;  // default: ground_truth (rendered or synthetic folder)
   std::string model;
@@ -134,6 +158,7 @@ struct Options {
   std::string loop_verify_groups =
       cge::slam::LoopCloserSettings{}.verify_all_consistent_groups ? "consistent" : "best";  // best | consistent
   std::string cge_scaling;  // raw | normalised; empty: the LoopCloserSettings default
+  std::string cge_ties = "all";  // all | mean | min: TieMode of the loop closer's degree sums
   bool map = false;         // write map.ply, map.ot, map.bt, map_top.png
   std::string out;
   bool force = false;
@@ -190,7 +215,7 @@ void apply_settings_file(const fs::path& file, cge::PinholeIntrinsics<double>& i
 const std::vector<std::string>& output_names() {
   static const std::vector<std::string> names = {"trajectory.txt", "keyframes.txt", "loops.csv",   "frames.csv",
                                                  "timings.csv",    "summary.json",  "groundtruth.txt", "map.ply",
-                                                 "map.ot",         "map.bt",        "map_top.png"};
+                                                 "map.ot",         "map.bt",        "map_top.png",  "loops.txt"};
   return names;
 }
 
@@ -359,15 +384,28 @@ class FrameSource {
   virtual std::vector<cge::SegmentedInstance> instances(int /*index*/) { return {}; }
   /// Ground-truth poses (timestamp, T_world_camera), when known.
   virtual std::vector<std::pair<double, Eigen::Isometry3d>> ground_truth() const { return {}; }
+  /// Ground-truth loops, when known (std::nullopt: none to evaluate against). `queries`: the stamps
+  /// (as "%.6f") of the keyframes the loop closer queried; a source may keep only their loops.
+  virtual std::optional<std::vector<cge::metrics::GroundTruthLoop>> ground_truth_loops(
+      const std::set<std::string>& /*queries*/) const {
+    return std::nullopt;
+  }
 };
 
 class DatasetSource final : public FrameSource {
  public:
   /// `moving_masks`: the sequence's exact ground-truth mask folder (a synthetic sequence's masks/),
   /// or null when it has none (real data): the frames then carry no moving mask.
+  /// `loops_file`: the sequence's loops.txt (a cge_sim loop scene), or empty when it has none.
   DatasetSource(const cge::dataset::TumSequence& sequence, int frames,
-                std::unique_ptr<cge::PrecomputedMaskReader> moving_masks)
-      : sequence_(sequence), frames_(frames), moving_masks_(std::move(moving_masks)) {}
+                std::unique_ptr<cge::PrecomputedMaskReader> moving_masks, const fs::path& loops_file)
+      : sequence_(sequence), frames_(frames), moving_masks_(std::move(moving_masks)) {
+    if (!loops_file.empty()) loops_ = cge::metrics::read_ground_truth_loops_file(loops_file.string());
+  }
+  std::optional<std::vector<cge::metrics::GroundTruthLoop>> ground_truth_loops(
+      const std::set<std::string>& /*queries*/) const override {
+    return loops_;  // the user's file as it is, as cge_eval loops reads it
+  }
   std::vector<std::pair<double, Eigen::Isometry3d>> ground_truth() const override {
     std::vector<std::pair<double, Eigen::Isometry3d>> gt;
     for (const auto& p : sequence_.ground_truth()) gt.emplace_back(p.timestamp_s, p.T_world_camera);
@@ -392,6 +430,7 @@ class DatasetSource final : public FrameSource {
   const cge::dataset::TumSequence& sequence_;
   int frames_;
   std::unique_ptr<cge::PrecomputedMaskReader> moving_masks_;
+  std::optional<std::vector<cge::metrics::GroundTruthLoop>> loops_;
 };
 
 class RenderedSource final : public FrameSource {
@@ -435,6 +474,34 @@ class RenderedSource final : public FrameSource {
     }
     return gt;
   }
+  /// The loop scenes' own ground truth; for the other presets the same rule (cge::sim::
+  /// ground_truth_loops, its default settings: back within 0.3 m and 20 degrees after at least 2 m
+  /// of travel) applied to the rendered poses. Only the loops of the queried keyframes are kept: on
+  /// a camera that stays in one place (walking_xyz) almost every pair of distant frames is a loop.
+  /// The pairs grow with the square of the length, so beyond kMaxLoopTruthFrames frames (at most
+  /// 1.6 million pairs, 13 MB while they are filtered) there is no ground truth.
+  std::optional<std::vector<cge::metrics::GroundTruthLoop>> ground_truth_loops(
+      const std::set<std::string>& queries) const override {
+    const cge::sim::SequenceSpec& spec = renderer_.spec();
+    if (spec.T_world_camera.size() > static_cast<std::size_t>(kMaxLoopTruthFrames)) return std::nullopt;
+    const auto stamp = [&spec](int i) { return spec.start_timestamp_s + static_cast<double>(i) / spec.frame_rate_hz; };
+    const bool loop_scene = spec.name.rfind("loop_", 0) == 0;
+    const std::vector<cge::sim::LoopPair> pairs =
+        loop_scene ? spec.loops : cge::sim::ground_truth_loops(spec.T_world_camera);
+    std::vector<cge::metrics::GroundTruthLoop> loops;
+    char text[32];
+    for (const cge::sim::LoopPair& p : pairs) {
+      std::snprintf(text, sizeof text, "%.6f", stamp(p.query_frame));
+      if (queries.count(text) == 0) continue;
+      cge::metrics::GroundTruthLoop l;
+      l.query_timestamp_s = stamp(p.query_frame);
+      l.match_timestamp_s = stamp(p.match_frame);
+      l.query_index = p.query_frame;
+      l.match_index = p.match_frame;
+      loops.push_back(l);
+    }
+    return loops;
+  }
 
  private:
   cge::sim::SequenceRenderer renderer_;
@@ -444,6 +511,20 @@ class RenderedSource final : public FrameSource {
   std::vector<int> moving_ids_;
   cge::sim::RenderedFrame last_;
 };
+
+/// The preset that trains the vocabulary of a rendered run of `evaluated` (never itself).
+std::string vocabulary_preset(const std::string& evaluated) {
+  return evaluated == kVocabularyPreset ? kVocabularyPresetOtherwise : kVocabularyPreset;
+}
+
+/// The vocabulary of a rendered run without --vocabulary (kVocabularyPreset, see there).
+cge::bow::Vocabulary train_default_vocabulary(const std::string& preset_name, std::uint64_t seed) {
+  const cge::sim::RendererFrameSource<cge::sim::SequenceRenderer> preset(
+      cge::sim::SequenceRenderer(cge::sim::make_preset(preset_name, kVocabularyPresetFrames, seed)));
+  cge::slam::VocabularyTrainingSettings training;  // cge_vocab's defaults: 1000 ORB, k = 10, L = 4, seed 1
+  training.frame_step = kVocabularyPresetFrames / kVocabularyImages;
+  return cge::slam::train_vocabulary(preset, kVocabularyPresetFrames, training);
+}
 
 // ---- summary ---------------------------------------------------------------------------------------
 
@@ -558,6 +639,84 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
   return j;
 }
 
+// ---- loops against the ground truth ------------------------------------------------------------------
+
+/// loops.txt as cge_sim writes it (stamps as the rendered frames' stems).
+void write_ground_truth_loops(std::ostream& f, const std::vector<cge::metrics::GroundTruthLoop>& loops) {
+  f << "# ground-truth loops: the query frame revisits the place seen in the match frame (match < query)\n"
+       "# indices count the frames from 0\n"
+       "# query_timestamp match_timestamp query_index match_index\n";
+  char line[128];
+  for (const cge::metrics::GroundTruthLoop& l : loops) {
+    std::snprintf(line, sizeof line, "%.6f %.6f %lld %lld\n", l.query_timestamp_s, l.match_timestamp_s, l.query_index,
+                  l.match_index);
+    f << line;
+  }
+}
+
+nlohmann::ordered_json loop_evaluation_json(const cge::metrics::LoopEvaluation& e) {
+  const auto number = [](double v) { return std::isnan(v) ? nlohmann::ordered_json() : nlohmann::ordered_json(v); };
+  nlohmann::ordered_json j = {{"ground_truth_pairs", e.ground_truth_pairs},
+                              {"queried_keyframes", e.queried_keyframes},
+                              {"detections", e.detections},
+                              {"correct_detections", e.correct_detections},
+                              {"precision", number(e.precision)},
+                              {"loop_queries", e.loop_queries},
+                              {"detected_loop_queries", e.detected_loop_queries},
+                              {"query_recall", number(e.query_recall)},
+                              {"loop_events", e.loop_events},
+                              {"detected_loop_events", e.detected_loop_events},
+                              {"event_recall", number(e.event_recall)},
+                              {"open_loop_queries", e.open_loop_queries},
+                              {"open_query_recall", number(e.open_query_recall)}};
+  j["missed_by_reason"] = nlohmann::ordered_json::object();
+  for (const auto& [reason, count] : e.missed_by_reason) j["missed_by_reason"][reason] = count;
+  return j;
+}
+
+/// The accepted loops, each marked correct or wrong against the ground-truth loops and, where the
+/// ground-truth poses have both stamps, with how far apart the two cameras really were (centres,
+/// metres; optical axes, degrees); then the figures (docs/EVALUATION.md); precision and recalls are
+/// nan when their denominator is 0.
+void print_loop_evaluation(const std::vector<cge::slam::LoopRecord>& loops,
+                           const std::vector<cge::metrics::GroundTruthLoop>& ground_truth,
+                           const std::vector<std::pair<double, Eigen::Isometry3d>>& poses,
+                           const cge::metrics::LoopEvaluation& e) {
+  const auto stamp = [](double t) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6f", t);
+    return std::string(text);
+  };
+  std::set<std::pair<std::string, std::string>> pairs;
+  for (const cge::metrics::GroundTruthLoop& l : ground_truth) {
+    pairs.emplace(stamp(l.query_timestamp_s), stamp(l.match_timestamp_s));
+  }
+  std::map<std::string, Eigen::Isometry3d> pose_at;
+  for (const auto& p : poses) pose_at.emplace(stamp(p.first), p.second);
+  for (const cge::slam::LoopRecord& l : loops) {
+    if (!l.accepted) continue;
+    const std::string q = stamp(l.query_timestamp_s), m = stamp(l.match_timestamp_s);
+    std::printf("loop_accepted query %s match %s keyframes %d %d inliers %d %s", q.c_str(), m.c_str(),
+                l.query_keyframe, l.match_keyframe, l.matched_points, pairs.count({q, m}) > 0 ? "correct" : "wrong");
+    const auto pq = pose_at.find(q), pm = pose_at.find(m);
+    if (pq != pose_at.end() && pm != pose_at.end()) {
+      const double distance_m = (pq->second.translation() - pm->second.translation()).norm();
+      const double cosine = pq->second.linear().col(2).dot(pm->second.linear().col(2));
+      const double angle_deg = std::acos(std::clamp(cosine, -1.0, 1.0)) * 180.0 / M_PI;
+      std::printf(" ground_truth_apart %.3f m %.1f deg", distance_m, angle_deg);
+    }
+    std::printf("\n");
+  }
+  const auto print_line = [](const char* name, double value) { std::printf("%s %.6g\n", name, value); };
+  print_line("loop_ground_truth_pairs", static_cast<double>(e.ground_truth_pairs));
+  print_line("loop_correct", static_cast<double>(e.correct_detections));
+  print_line("loop_precision", e.precision);
+  print_line("loop_queries_with_loop", static_cast<double>(e.loop_queries));
+  print_line("loop_query_recall", e.query_recall);
+  print_line("loop_events", static_cast<double>(e.loop_events));
+  print_line("loop_event_recall", e.event_recall);
+}
+
 // ---- the run ---------------------------------------------------------------------------------------
 
 /// Compares the first image with the settings file (Camera.width x Camera.height) and with the ORB
@@ -628,6 +787,17 @@ int run(Options opt) {
   if (opt.frames_given && opt.frames < 1) {
     throw UsageError("--frames must be at least 1, got " + std::to_string(opt.frames) + " (omit it for every frame)");
   }
+  if (!opt.dataset.empty() && opt.preset != kDefaultPreset) {
+    throw UsageError("--preset renders a sequence: it cannot be combined with --dataset");
+  }
+  if (opt.dataset.empty()) {
+    const std::vector<std::string> names = cge::sim::preset_names();
+    if (std::find(names.begin(), names.end(), opt.preset) == names.end()) {
+      std::string known;
+      for (const std::string& name : names) known += (known.empty() ? "" : ", ") + name;
+      throw UsageError("--preset: unknown preset '" + opt.preset + "' (known: " + known + ")");
+    }
+  }
   if (opt.dataset.empty() && opt.frames_given) {
     cge_tool::require_at_most("--frames", opt.frames, cge::sim::kMaxPresetFrames, "rendered: 10 minutes at 30 Hz");
   }
@@ -669,6 +839,13 @@ int run(Options opt) {
   } else if (!opt.cge_scaling.empty()) {
     throw UsageError("--cge-scaling: '" + opt.cge_scaling + "' is not raw or normalised");
   }
+  if (opt.cge_ties == "mean") {
+    loop_settings.degree_entropy.ties = cge::TieMode::mean;
+  } else if (opt.cge_ties == "min") {
+    loop_settings.degree_entropy.ties = cge::TieMode::min;
+  } else if (opt.cge_ties != "all") {
+    throw UsageError("--cge-ties: '" + opt.cge_ties + "' is not all, mean or min");
+  }
   loop_settings.verified_members = opt.loop_verified_members;
   loop_settings.verify_all_consistent_groups = opt.loop_verify_groups == "consistent";
   loop_settings.min_group_total_ratio = opt.loop_min_group_ratio;
@@ -677,20 +854,24 @@ int run(Options opt) {
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("loop settings: ") + e.what());
   }
-  const nlohmann::ordered_json loop_settings_json = {
-      {"enabled", !opt.vocabulary.empty()},
+  const bool loops_off = opt.vocabulary == kNoVocabulary;
+  nlohmann::ordered_json loop_settings_json = {
+      {"enabled", false},  // set below, once the vocabulary is known
       {"scoring", cge::slam::to_string(loop_settings.scoring)},
       {"min_score", min_score},
       {"min_score_setting", bow_gate ? "min_bow_score" : "min_cge_score"},
       {"cge_scaling", loop_settings.exponent_scaling == cge::ScalingKind::raw ? "raw" : "normalised"},
+      {"cge_ties", opt.cge_ties},
       {"verified_members", loop_settings.verified_members},
       {"verify_groups", opt.loop_verify_groups},
       {"min_group_total_ratio", loop_settings.min_group_total_ratio}};
   std::unique_ptr<cge::bow::Vocabulary> vocabulary;
-  if (!opt.vocabulary.empty() && fs::is_directory(opt.vocabulary)) {
+  std::string vocabulary_source = loops_off ? "none: loop closing off (--vocabulary none)" : opt.vocabulary;
+  double vocabulary_training_s = 0;
+  if (!opt.vocabulary.empty() && !loops_off && fs::is_directory(opt.vocabulary)) {
     throw UsageError("--vocabulary: '" + opt.vocabulary + "' is a directory, not a file");
   }
-  if (!opt.vocabulary.empty()) {
+  if (!opt.vocabulary.empty() && !loops_off) {
     vocabulary = std::make_unique<cge::bow::Vocabulary>(cge::bow::Vocabulary::load_file(opt.vocabulary));
   }
 
@@ -703,7 +884,7 @@ int run(Options opt) {
     const int frames = opt.frames > 0 ? opt.frames : kDefaultPresetFrames;
     if (opt.segmentation == "precomputed") throw UsageError("--segmentation precomputed needs --dataset");
     auto rendered =
-        std::make_unique<RenderedSource>(kDefaultPreset, frames, opt.seed, opt.segmentation == "ground_truth");
+        std::make_unique<RenderedSource>(opt.preset, frames, opt.seed, opt.segmentation == "ground_truth");
     const cge::sim::PinholeCamera& cam = rendered->camera();
     intrinsics = {cam.fx_px, cam.fy_px, cam.cx_px, cam.cy_px};
     settings.frame.depth_units_per_metre = cam.depth_units_per_metre;
@@ -716,7 +897,7 @@ int run(Options opt) {
       segmenter = cge::dataset::make_segmenter(seg, "");
     }
     source = std::move(rendered);
-    source_name = std::string(kDefaultPreset) + " rendered (" + std::to_string(frames) + " frames, seed " +
+    source_name = opt.preset + " rendered (" + std::to_string(frames) + " frames, seed " +
                   std::to_string(opt.seed) + ")";
   } else {
     if (!fs::is_directory(opt.dataset)) throw UsageError("--dataset: '" + opt.dataset + "' is not a folder");
@@ -739,7 +920,10 @@ int run(Options opt) {
       mask_settings.require_every_frame = true;  // the simulator writes a PNG for every frame
       moving_masks = std::make_unique<cge::PrecomputedMaskReader>(exact_masks.string(), mask_settings);
     }
-    source = std::make_unique<DatasetSource>(*sequence, frames, std::move(moving_masks));
+    // A cge_sim loop scene's loops.txt: the loop decisions are evaluated against it.
+    const fs::path loops_file = fs::path(opt.dataset) / "loops.txt";
+    source = std::make_unique<DatasetSource>(*sequence, frames, std::move(moving_masks),
+                                             fs::is_regular_file(loops_file) ? loops_file : fs::path());
     source_name = opt.dataset;
     cge::dataset::SegmentationSourceSettings seg;
     seg.source = cge::dataset::parse_segmentation_source(opt.segmentation);
@@ -761,6 +945,26 @@ int run(Options opt) {
   if (source->frame_count() > 0) check_first_image(source->frame(0).bgr.size(), settings_path, settings.frame.orb);
 
   OutputFolder out(opt.out, opt.force);
+  // Loop closing's vocabulary, when none was given: after every check, as it is the first work.
+  if (opt.vocabulary.empty()) {
+    if (opt.dataset.empty()) {
+      const auto training_start = std::chrono::steady_clock::now();
+      const std::uint64_t seed = opt.seed + 1;  // another scene: other textures, paths and phases
+      const std::string trained_on = vocabulary_preset(opt.preset);
+      vocabulary = std::make_unique<cge::bow::Vocabulary>(train_default_vocabulary(trained_on, seed));
+      vocabulary_training_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - training_start).count();
+      vocabulary_source = trained_on + " rendered, seed " + std::to_string(seed) + ", " +
+                          std::to_string(kVocabularyImages) + " images over its " +
+                          std::to_string(kVocabularyPresetFrames) + " frames (trained here; not the evaluated frames)";
+    } else {
+      vocabulary_source = "none given: loop closing off (train one with cge_vocab, pass --vocabulary FILE)";
+    }
+  }
+  const bool loop_closing = vocabulary != nullptr;
+  loop_settings_json["enabled"] = loop_closing;
+  loop_settings_json["vocabulary"] = vocabulary_source;
+  if (vocabulary != nullptr) loop_settings_json["vocabulary_words"] = vocabulary->word_count();
   cge::slam::System system(settings, intrinsics, std::move(segmenter));
   const auto start = std::chrono::steady_clock::now();
   const auto elapsed_s = [&start] {
@@ -798,11 +1002,29 @@ int run(Options opt) {
 
   out.write("trajectory.txt", [&](std::ostream& f) { cge::slam::write_trajectory(f, system); });
   out.write("keyframes.txt", [&](std::ostream& f) { cge::slam::write_keyframes(f, system.map()); });
-  out.write("loops.csv", [&](std::ostream& f) { cge::slam::write_loops_csv(f, system.loops()); });
+  std::ostringstream loops_csv;
+  cge::slam::write_loops_csv(loops_csv, system.loops());
+  out.write("loops.csv", [&](std::ostream& f) { f << loops_csv.str(); });
+  // The loop decisions against the ground-truth loops, read back from loops.csv as cge_eval loops
+  // reads the file (same stamps, same numbers).
+  std::set<std::string> queried;
+  for (const cge::slam::LoopRecord& l : system.loops()) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6f", l.query_timestamp_s);
+    queried.insert(text);
+  }
+  const std::optional<std::vector<cge::metrics::GroundTruthLoop>> gt_loops = source->ground_truth_loops(queried);
+  std::optional<cge::metrics::LoopEvaluation> loop_evaluation;
+  if (gt_loops && loop_closing) {
+    std::istringstream rows(loops_csv.str());
+    loop_evaluation = cge::metrics::evaluate_loops(*gt_loops, cge::metrics::read_loop_queries(rows, "loops.csv"));
+  }
   out.write("frames.csv", [&](std::ostream& f) { cge::slam::write_frames_csv(f, system.frames()); });
   out.write("timings.csv", [&](std::ostream& f) { cge::slam::write_timings_csv(f, system.frames()); });
   const auto gt = source->ground_truth();
   nlohmann::ordered_json summary = make_summary(system, opt, source_name, gt, loop_settings_json);
+  if (vocabulary_training_s > 0) summary["vocabulary_training_s"] = vocabulary_training_s;
+  if (loop_evaluation) summary["loop_evaluation"] = loop_evaluation_json(*loop_evaluation);
   if (opt.map) {
     // Semantic maps from the final (optimised) keyframes: dense cloud, octree, top view, scores.
     cge::mapping::SemanticMapBuilder map(intrinsics, {}, settings.frame.distortion);
@@ -826,6 +1048,9 @@ int run(Options opt) {
       for (const auto& p : gt) f << cge::slam::tum_pose_line(p.first, p.second) << '\n';
     });
   }
+  if (opt.dataset.empty() && gt_loops) {
+    out.write("loops.txt", [&](std::ostream& f) { write_ground_truth_loops(f, *gt_loops); });
+  }
   out.commit();
 
   std::printf("%s: %d frames, %d tracked, %d lost, %d keyframes; wrote %s in %.1f s\n", kProgram, n,
@@ -834,8 +1059,18 @@ int run(Options opt) {
   // The evaluation as `name value` lines (the figures of summary.json a reader looks for first).
   const auto print_line = [](const char* name, double value) { std::printf("%s %.6g\n", name, value); };
   print_line("keyframes", system.map().active_keyframe_count());
+  std::printf("vocabulary %s\n", vocabulary_source.c_str());
+  if (vocabulary_training_s > 0) print_line("vocabulary_training_s", vocabulary_training_s);
+  print_line("loop_queries", static_cast<double>(system.loops().size()));
   print_line("loops_accepted", summary["loops"]["accepted"].get<double>());
   print_line("loop_corrections", system.loop_corrections());
+  if (loop_evaluation) {
+    print_loop_evaluation(system.loops(), *gt_loops, gt, *loop_evaluation);
+  } else if (loop_closing && opt.dataset.empty()) {
+    std::printf("loop_evaluation skipped: more than %d rendered frames (ground-truth loops grow with the square of "
+                "the length)\n",
+                kMaxLoopTruthFrames);
+  }
   if (!summary["dynamic_leak"]["rate"].is_null()) {
     print_line("dynamic_leak_rate", summary["dynamic_leak"]["rate"].get<double>());
   }
@@ -857,12 +1092,15 @@ int run(Options opt) {
 int main(int argc, char** argv) {
   Options opt;
   CLI::App app{"Runs the cge reference SLAM pipeline (cge " CGE_VERSION_STRING
-               ") on an RGB-D sequence in the TUM layout, or without --dataset on the\n"
-               "walking_xyz synthetic preset rendered in memory, and writes trajectory.txt, keyframes.txt,\n"
-               "loops.csv, frames.csv, timings.csv and summary.json into --out.",
+               ") on an RGB-D sequence in the TUM layout, or without --dataset on a\n"
+               "synthetic preset rendered in memory (walking_xyz by default), and writes trajectory.txt,\n"
+               "keyframes.txt, loops.csv, frames.csv, timings.csv and summary.json into --out.",
                kProgram};
   app.set_version_flag("--version", std::string(kProgram) + " " + CGE_VERSION_STRING);
-  app.add_option("--dataset", opt.dataset, "TUM folder (rgb.txt, depth.txt, camera.yaml); none: render walking_xyz");
+  app.add_option("--dataset", opt.dataset, "TUM folder (rgb.txt, depth.txt, camera.yaml); none: render --preset");
+  app.add_option("--preset", opt.preset,
+                 "without --dataset: the synthetic preset rendered in memory (cge_sim's names, e.g. loop_dynamic)")
+      ->capture_default_str();
   app.add_option("--mode", opt.mode, "dynamic handling: none, Y (masks), YM (masks + MAD), YMK (+ patch keyframes)")
       ->capture_default_str();
   app.add_option("--segmentation", opt.segmentation,
@@ -884,7 +1122,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"box", "mask"}))
       ->capture_default_str();
   app.add_option("--settings", opt.settings, "ORB-SLAM2 TUM YAML settings (default: DATASET/camera.yaml)");
-  app.add_option("--vocabulary", opt.vocabulary, "bag-of-words vocabulary (cge_vocab) enabling loop closing");
+  app.add_option("--vocabulary", opt.vocabulary,
+                 "bag-of-words vocabulary (cge_vocab) for loop closing; none: loop closing off; not given: rendered "
+                 "runs train one on another preset (walking_halfsphere, seed + 1), --dataset runs close no loops");
   app.add_option("--loop-correction", opt.loop_correction,
                  "what an accepted loop triggers: none (detect and log only), pgo (pose graph), pgo+ba (and global "
                  "bundle adjustment)")
@@ -936,6 +1176,11 @@ int main(int argc, char** argv) {
                              "normalised (by the mean exponent); default ") +
                      (cge::slam::LoopCloserSettings{}.exponent_scaling == cge::ScalingKind::raw ? "raw" : "normalised"))
       ->check(CLI::IsMember({"raw", "normalised"}));
+  app.add_option("--cge-ties", opt.cge_ties,
+                 "tied shortest paths in the loop closer's degree sums: all (every path), mean (one averaged path "
+                 "per node) or min (the path with the smallest sum, closest to the paper's rule)")
+      ->check(CLI::IsMember({"all", "mean", "min"}))
+      ->capture_default_str();
   app.add_option("--seed", opt.seed, "seed of the MAD samples (and of the rendered sequence)")
       ->check(cge_tool::seed_check())
       ->capture_default_str();

@@ -884,7 +884,8 @@ TEST_CASE("worked values: star K_{1,4}", "[dde][spec]") {
     REQUIRE(r.exponents[static_cast<std::size_t>(leaf)] == Approx(19.2436598821719).epsilon(1e-12));
   REQUIRE(r.entropy_bits == Approx(2.05687613876156).epsilon(1e-12));
   REQUIRE(r.information_index == Approx(0.2650519561258).epsilon(1e-12));
-  // The default settings are the paper's (alpha 0.5, lambda 1, exp coefficients, all ties).
+  // The default settings are the specification's (alpha 0.5, lambda 1, exp coefficients, all ties;
+  // the paper gives no value for alpha or lambda).
   REQUIRE(cge::DegreeDegreeEntropy<double>().information_index(g) == Approx(0.2650519561258).epsilon(1e-12));
 }
 

@@ -220,9 +220,9 @@ TEST_CASE("uniform_unit_double takes the top 53 bits of the raw engine output", 
 
 // ---- settings and small types ------------------------------------------------------------------------
 
-TEST_CASE("DepthMADSettings: paper defaults, and every bad field is named", "[depth_mad][settings]") {
+TEST_CASE("DepthMADSettings: defaults, and every bad field is named", "[depth_mad][settings]") {
   const DepthMADSettings s;
-  REQUIRE(s.samples_per_instance == 100);  // n, paper
+  REQUIRE(s.samples_per_instance == 100);  // n, ours (the paper gives none)
   REQUIRE(s.disc_radius_px == 6);          // r, paper
   REQUIRE(s.mad_scale == 1.0);             // k, paper
   REQUIRE(s.min_valid_samples == 5);

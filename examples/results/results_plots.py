@@ -13,7 +13,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 DPI = 110
-MODE_COLOURS = {"none": "#b2182b", "Y": "#ef8a62", "YM": "#67a9cf", "YMK": "#2166ac"}
+MODE_COLOURS = {"ORB-SLAM2": "#4d4d4d", "none": "#b2182b", "Y": "#ef8a62", "YM": "#67a9cf", "YMK": "#2166ac"}
+SERIES_LABELS = {"none": "none (ablation)", "ORB-SLAM2": "ORB-SLAM2 (mean of runs)"}
 SCORING_COLOURS = {"bow_only": "#7f7f7f", "cge": "#d95f02", "combined": "#1b9e77"}
 SCORING_LABELS = {"bow_only": "BoW only", "cge": "BoW + CGE (paper ranking)", "combined": "BoW + CGE (combined)"}
 
@@ -55,7 +56,7 @@ def trajectories(path: Path, walking: dict, preset: str, modes: list[str]) -> st
         ax.plot(gx, gy, color="black", linewidth=1.0, label="ground truth")
         ax.plot(ex, ey, color=MODE_COLOURS.get(mode, "blue"), linewidth=1.0, label="estimate")
         ate = walking[(preset, mode)]["summary"].get("ate", {}).get("rmse_m")
-        title = f"{preset}, mode {mode}"
+        title = f"{preset}, mode {SERIES_LABELS.get(mode, mode)}"
         if ate is not None:
             title += f"\nATE RMSE {ate * 1000:.1f} mm"
         ax.set_title(title, fontsize=9)
@@ -69,7 +70,7 @@ def trajectories(path: Path, walking: dict, preset: str, modes: list[str]) -> st
 def grouped_bars(path: Path, title: str, ylabel: str, groups: list[str], series: list[str],
                  value, colours: dict[str, str], log: bool = False) -> str:
     """One group of bars per entry of groups, one bar per series; value(group, series) or None."""
-    fig, ax = plt.subplots(figsize=(7.5, 3.8))
+    fig, ax = plt.subplots(figsize=(9.0, 3.8))
     width = 0.8 / max(1, len(series))
     for i, name in enumerate(series):
         xs, ys = [], []
@@ -78,7 +79,7 @@ def grouped_bars(path: Path, title: str, ylabel: str, groups: list[str], series:
             if v is not None:
                 xs.append(g + (i - (len(series) - 1) / 2) * width)
                 ys.append(v)
-        bars = ax.bar(xs, ys, width=width, color=colours.get(name), label=name)
+        bars = ax.bar(xs, ys, width=width, color=colours.get(name), label=SERIES_LABELS.get(name, name))
         ax.bar_label(bars, fmt="%.3g", fontsize=6, padding=1)
     ax.set_xticks(range(len(groups)))
     ax.set_xticklabels(groups, fontsize=8)
@@ -160,7 +161,8 @@ def roc_study(path: Path, study: dict, presets: list[str]) -> str | None:
 
 
 def make_all(folder: Path, walking: dict, loops: dict, study: dict, walking_presets: list[str], modes: list[str],
-             loop_presets: list[str], loop_scorings: list[str]) -> dict[str, str]:
+             loop_presets: list[str], loop_scorings: list[str], peer: dict | None = None) -> dict[str, str]:
+    """peer: {sequence: {"summary": results_peer.summarise(...)}} of the ORB-SLAM2 runs, or empty."""
     figures: dict[str, str] = {}
 
     def keep(key: str, name: str | None) -> None:
@@ -171,6 +173,12 @@ def make_all(folder: Path, walking: dict, loops: dict, study: dict, walking_pres
         keep(f"trajectory_{preset}", trajectories(folder / f"trajectory_{preset}.png", walking, preset,
                                                   ["none", "YMK"]))
 
+    def peer_mean(group, key):
+        stats = ((peer or {}).get(group) or {}).get("summary", {}).get(key)
+        return stats["mean"] if stats else None
+
+    with_peer = (["ORB-SLAM2"] if peer else []) + modes
+
     def summary_value(group, mode, *keys):
         run = walking.get((group, mode))
         value = run["summary"] if run else None
@@ -178,11 +186,13 @@ def make_all(folder: Path, walking: dict, loops: dict, study: dict, walking_pres
             value = value.get(key) if isinstance(value, dict) else None
         return value
 
-    keep("keyframes", grouped_bars(folder / "keyframes.png", "Keyframes per mode (none/Y/YM: ORB-SLAM2-style policy)",
-                                   "keyframes", walking_presets, modes,
-                                   lambda g, m: summary_value(g, m, "keyframes"), MODE_COLOURS))
-    keep("ate", grouped_bars(folder / "ate.png", "ATE RMSE per mode", "ATE RMSE [m]", walking_presets, modes,
-                             lambda g, m: summary_value(g, m, "ate", "rmse_m"), MODE_COLOURS, log=True))
+    keep("keyframes", grouped_bars(folder / "keyframes.png", "Kept keyframes (none/Y/YM: ORB-SLAM2's RGB-D rule)",
+                                   "keyframes", walking_presets, with_peer,
+                                   lambda g, m: peer_mean(g, "keyframes") if m == "ORB-SLAM2" else
+                                   summary_value(g, m, "keyframes"), MODE_COLOURS))
+    keep("ate", grouped_bars(folder / "ate.png", "ATE RMSE per mode and ORB-SLAM2", "ATE RMSE [m]", walking_presets,
+                             with_peer, lambda g, m: peer_mean(g, "ate_rmse_m") if m == "ORB-SLAM2" else
+                             summary_value(g, m, "ate", "rmse_m"), MODE_COLOURS, log=True))
     keep("leak", grouped_bars(folder / "leak.png", "Features on moving bodies kept as static (leak rate)",
                               "leak rate", walking_presets, modes,
                               lambda g, m: summary_value(g, m, "dynamic_leak", "rate"), MODE_COLOURS))

@@ -15,7 +15,7 @@ from pathlib import Path
 SECTIONS = [
     "## The setting, and what differs from the paper's",
     "## Trajectory error per sequence and mode",
-    "## Keyframes against the ORB-SLAM2-style policy",
+    "## Keyframes against ORB-SLAM2",
     "## Dynamic features that survive filtering",
     "## Time per stage",
     "## Semantic map scores",
@@ -76,18 +76,31 @@ def main() -> None:
         if not path.is_file() or path.read_bytes()[:8] != b"\x89PNG\r\n\x1a\n":
             fail(f"figure {name} is missing or not a PNG")
 
-    # The report's numbers are the runs' own: ATE and keyframes of two runs, read back.
-    for preset, mode in (("walking_xyz", "YMK"), ("walking_static", "none")):
-        summary = json.loads((work / "runs" / preset / mode / "summary.json").read_text(encoding="utf-8"))
-        row = table_row(report, preset, mode)
+    # The report's numbers are the runs' own: ATE (with its SD) and keyframes of some runs, read back.
+    # Columns: sequence, ORB-SLAM2, none, Y, YM, YMK.
+    column = {"none": 2, "Y": 3, "YM": 4, "YMK": 5}
+    ate_section = report.split("### ATE RMSE [mm]")[1]
+    sd_section = report.split("### ATE RMSE / standard deviation")[1]
+    for preset, mode in (("walking_xyz", "YMK"), ("walking_static", "none"), ("sitting_xyz (low-dynamic)", "YM")):
+        folder = preset.split()[0]
+        summary = json.loads((work / "runs" / folder / mode / "summary.json").read_text(encoding="utf-8"))
+        row = table_row(ate_section, preset)
         expected = f"{summary['ate']['rmse_m'] * 1000:.1f}"
-        if row[2] != expected:
-            fail(f"ATE of {preset} {mode}: report {row[2]}, summary.json {expected}")
-    kf_section = report.split("## Keyframes against the ORB-SLAM2-style policy")[1]
+        if row[column[mode]] != expected:
+            fail(f"ATE of {preset} {mode}: report {row[column[mode]]}, summary.json {expected}")
+        expected = f"{expected} / {summary['ate']['std_m'] * 1000:.1f}"
+        if table_row(sd_section, preset)[column[mode]] != expected:
+            fail(f"ATE / SD of {preset} {mode}: report {table_row(sd_section, preset)[column[mode]]}, expected {expected}")
+    kf_section = report.split("## Keyframes against ORB-SLAM2")[1]
     summary = json.loads((work / "runs" / "walking_xyz" / "YMK" / "summary.json").read_text(encoding="utf-8"))
     kf_row = table_row(kf_section, "walking_xyz")
-    if kf_row[4] != str(summary["keyframes"]):
-        fail(f"YMK keyframes of walking_xyz: report {kf_row[4]}, summary.json {summary['keyframes']}")
+    if kf_row[5] != str(summary["keyframes"]):
+        fail(f"YMK keyframes of walking_xyz: report {kf_row[5]}, summary.json {summary['keyframes']}")
+    # Without the peer, its columns and targets say so instead of holding numbers.
+    if table_row(ate_section, "walking_xyz")[1] != "not run" or kf_row[1] != "not run":
+        fail("without --orbslam2 the ORB-SLAM2 columns do not say 'not run'")
+    if table_row(report.split("### Target: YMK's ATE")[1], "walking_xyz")[5] != "not run":
+        fail("without --orbslam2 the ATE target is not marked 'not run'")
     print(f"results suite (quick): {len(SECTIONS)} sections, {len(figures)} figures, numbers match the runs")
 
 

@@ -5,7 +5,12 @@
 # 3. a run into a folder holding a user's file is refused without --force and leaves it alone;
 #    with --force the user's file is still there, unchanged;
 # 4. a run that fails on bad input (an image that cannot be read) with --force leaves the files
-#    already in the folder as they were and no staging folder behind.
+#    already in the folder as they were and no staging folder behind;
+# 5. with a vocabulary file, loops.csv has one decision per keyframe; 6. --map writes the maps;
+# 7. without --vocabulary a rendered run trains one on another preset, says so, closes loops and
+#    prints each accepted one and the precision and recalls, whose counts are those cge_eval loops
+#    computes from the loops.txt and loops.csv it wrote (when cge_eval is built); --vocabulary none
+#    switches loop closing off; a bad --preset, --preset with --dataset and a bad --cge-ties exit 2.
 cmake_minimum_required(VERSION 3.16)
 
 foreach(var EXE WORK)
@@ -28,11 +33,20 @@ function(run_slam expected_rc)
                         "--- stdout ---\n${out}--- stderr ---\n${err}")
   endif()
   set(last_stderr "${err}" PARENT_SCOPE)
+  set(last_stdout "${out}" PARENT_SCOPE)
+endfunction()
+
+# The number after "name " on a line of standard output (cge_slam and cge_eval print `name value`).
+function(printed_value text name result)
+  if(NOT text MATCHES "(^|\n)${name} ([^\n]*)")
+    message(FATAL_ERROR "no '${name}' line in:\n${text}")
+  endif()
+  set(${result} "${CMAKE_MATCH_2}" PARENT_SCOPE)
 endfunction()
 
 run_slam(0 ${args} --out "${WORK}/a")
 run_slam(0 ${args} --out "${WORK}/b")
-set(deterministic trajectory.txt keyframes.txt loops.csv frames.csv groundtruth.txt)
+set(deterministic trajectory.txt keyframes.txt loops.csv frames.csv groundtruth.txt loops.txt)
 foreach(name IN LISTS deterministic timings.csv summary.json)
   if(NOT EXISTS "${WORK}/a/${name}")
     message(FATAL_ERROR "cge_slam did not write ${name}")
@@ -109,5 +123,81 @@ endif()
 file(READ "${WORK}/map/map.ply" ply LIMIT 16)
 if(NOT ply MATCHES "^ply")
   message(FATAL_ERROR "map.ply does not start with a PLY header")
+endif()
+
+# 7. Loop closing by default (rendered runs): the main job's scene, long enough for the loop closer
+#    to accept re-observations of the desk (the ground-truth loops of walking_xyz need 2 m of travel,
+#    i.e. nearly the whole 300 frames; docs/SLAM.md).
+set(loop_run --frames 150 --seed 0)
+run_slam(0 ${loop_run} --out "${WORK}/loop_run")
+set(run_out "${last_stdout}")
+if(NOT run_out MATCHES "\nvocabulary walking_halfsphere rendered, seed 1, 20 images over its 300 frames \\(trained here; not the evaluated frames\\)\n")
+  message(FATAL_ERROR "the default run does not say which frames trained its vocabulary:\n${run_out}")
+endif()
+printed_value("${run_out}" loops_accepted accepted)
+if(accepted LESS 1)
+  message(FATAL_ERROR "the default run accepted no loop:\n${run_out}")
+endif()
+string(REGEX MATCHALL "\nloop_accepted query [0-9.]+ match [0-9.]+ keyframes [0-9]+ [0-9]+ inliers [0-9]+ (correct|wrong) ground_truth_apart [0-9.]+ m [0-9.]+ deg"
+       decision_lines "${run_out}")
+list(LENGTH decision_lines decisions)
+if(NOT decisions EQUAL accepted)
+  message(FATAL_ERROR "${decisions} loop_accepted lines for ${accepted} accepted loops:\n${run_out}")
+endif()
+foreach(name loop_ground_truth_pairs loop_precision loop_query_recall loop_event_recall)
+  printed_value("${run_out}" ${name} value)
+endforeach()
+file(READ "${WORK}/loop_run/summary.json" summary)
+string(JSON enabled GET "${summary}" loop_settings enabled)
+if(NOT enabled STREQUAL "ON")
+  message(FATAL_ERROR "summary.json: loop closing enabled '${enabled}'")
+endif()
+if(NOT EXISTS "${WORK}/loop_run/loops.txt")
+  message(FATAL_ERROR "the rendered run wrote no loops.txt")
+endif()
+if(DEFINED EVAL)
+  # The counts behind the printed precision and recalls (summary.json) are what cge_eval loops finds
+  # in the files the run wrote, exactly.
+  execute_process(COMMAND "${EVAL}" loops "${WORK}/loop_run/loops.txt" "${WORK}/loop_run/loops.csv"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE eval_out ERROR_VARIABLE err TIMEOUT 120)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "cge_eval loops failed: ${err}")
+  endif()
+  foreach(name ground_truth_pairs queried_keyframes detections correct_detections loop_queries
+               detected_loop_queries loop_events detected_loop_events)
+    string(JSON ours GET "${summary}" loop_evaluation ${name})
+    printed_value("${eval_out}" ${name} theirs)
+    if(NOT ours STREQUAL theirs)
+      message(FATAL_ERROR "loop_evaluation ${name} is ${ours} in summary.json, cge_eval loops says ${theirs}")
+    endif()
+  endforeach()
+  printed_value("${eval_out}" detections eval_detections)
+  if(NOT accepted EQUAL eval_detections)
+    message(FATAL_ERROR "cge_slam printed loops_accepted ${accepted}, cge_eval counts ${eval_detections} detections")
+  endif()
+endif()
+run_slam(0 ${args} --vocabulary none --out "${WORK}/no_loops")
+if(NOT last_stdout MATCHES "\nvocabulary none: loop closing off" OR last_stdout MATCHES "loop_precision")
+  message(FATAL_ERROR "--vocabulary none: loop closing was not reported off:\n${last_stdout}")
+endif()
+file(READ "${WORK}/no_loops/summary.json" summary)
+string(JSON enabled GET "${summary}" loop_settings enabled)
+if(NOT enabled STREQUAL "OFF")
+  message(FATAL_ERROR "--vocabulary none: summary.json says loop closing enabled '${enabled}'")
+endif()
+run_slam(2 ${args} --preset walking_fast --out "${WORK}/bad")
+if(NOT last_stderr MATCHES "--preset: unknown preset 'walking_fast' \\(known: walking_xyz, ")
+  message(FATAL_ERROR "a bad --preset is not named with the known ones: ${last_stderr}")
+endif()
+run_slam(2 --dataset "${CMAKE_CURRENT_LIST_DIR}/slam_blank" --preset loop_dynamic --out "${WORK}/bad")
+if(NOT last_stderr MATCHES "--preset renders a sequence: it cannot be combined with --dataset")
+  message(FATAL_ERROR "--preset with --dataset is not refused by name: ${last_stderr}")
+endif()
+run_slam(2 ${args} --cge-ties first --out "${WORK}/bad")
+if(NOT last_stderr MATCHES "--cge-ties")
+  message(FATAL_ERROR "a bad --cge-ties is not named: ${last_stderr}")
+endif()
+if(EXISTS "${WORK}/bad")
+  message(FATAL_ERROR "a refused run created its --out folder")
 endif()
 file(REMOVE_RECURSE "${WORK}")

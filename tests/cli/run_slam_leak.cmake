@@ -83,7 +83,10 @@ endforeach()
 if(NOT sum EQUAL moving)
   message(FATAL_ERROR "summary.json moving_keypoints ${moving} is not the sum ${sum} of frames.csv")
 endif()
-expect_json("${summary}" OFF loop_settings enabled)
+# A rendered run without --vocabulary closes loops with one trained on another preset.
+expect_json("${summary}" ON loop_settings enabled)
+expect_json("${summary}" "walking_halfsphere rendered, seed 4, .*not the evaluated frames.*" loop_settings vocabulary)
+expect_json("${summary}" all loop_settings cge_ties)
 expect_json("${summary}" combined loop_settings scoring)
 expect_json("${summary}" "0\\.50*" loop_settings min_score)
 expect_json("${summary}" min_cge_score loop_settings min_score_setting)
@@ -135,17 +138,21 @@ run_tool(2 "${EXE}" ${common} --keyframe-interval 0 --out "${WORK}/ymk_interval_
 
 # 2.
 run_tool(0 "${EXE}" ${common} --mode none --loop-scoring bow_only --loop-min-score 0.1 --cge-scaling raw
-         --out "${WORK}/settings")
+         --cge-ties min --out "${WORK}/settings")
 set(summary "${WORK}/settings/summary.json")
 expect_json("${summary}" bow_only loop_settings scoring)
 expect_json("${summary}" "0\\.10*1?" loop_settings min_score)
 expect_json("${summary}" min_bow_score loop_settings min_score_setting)
 expect_json("${summary}" raw loop_settings cge_scaling)
+expect_json("${summary}" min loop_settings cge_ties)
 
 # 3.
 if(DEFINED SIM)
   run_tool(0 "${SIM}" --preset walking_xyz ${common} --out "${WORK}/sequence")
   run_tool(0 "${EXE}" --dataset "${WORK}/sequence" --mode none --out "${WORK}/folder")
+  # A dataset run without --vocabulary closes no loops, and says so.
+  expect_json("${WORK}/folder/summary.json" OFF loop_settings enabled)
+  expect_json("${WORK}/folder/summary.json" "none given: loop closing off.*" loop_settings vocabulary)
   expect_json("${WORK}/folder/summary.json" ${frames} dynamic_leak frames_with_ground_truth)
   moving_columns("${WORK}/folder/frames.csv" folder_pairs)
   if(NOT folder_pairs STREQUAL rendered_pairs)

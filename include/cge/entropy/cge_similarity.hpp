@@ -32,7 +32,8 @@ struct CGESimilaritySettings {
   Scalar semantic_threshold = Scalar(0.95);
   /// mu: weight of the degree-degree term when the structure changed (paper: 0.5).
   Scalar degree_weight = Scalar(0.5);
-  /// a in S_ge = 1 / (1 + |dI|^a): an integer > 1 (paper default 2). Not the functional's alpha.
+  /// a in S_ge = 1 / (1 + |dI|^a): an integer > 1 (ours: 2, the smallest allowed; the paper gives
+  /// none). Not the functional's alpha.
   int similarity_exponent = 2;
 };
 

@@ -39,9 +39,15 @@ namespace cge {
 
 template <typename Scalar>
 struct DegreeDegreeSettings {
-  Scalar alpha = Scalar(0.5);   ///< base of the functional alpha^E, > 0 (paper: 0.5)
-  Scalar lambda = Scalar(1);    ///< scale of the information index, > 0 (paper: 1)
-  TieMode ties = TieMode::all;  ///< how tied shortest paths count (all = multiplicity)
+  /// Base of the functional alpha^E, > 0 (ours, the specification's 0.5; the paper gives no value:
+  /// alpha < 1 gives the nodes with the smallest degree-difference sums the most weight).
+  Scalar alpha = Scalar(0.5);
+  /// Scale of the information index, > 0 (ours: 1 keeps I in bits; the paper gives no value).
+  Scalar lambda = Scalar(1);
+  /// How tied shortest paths count: all (multiplicity, the specification's default). The paper
+  /// chooses one path, "the case where v has the shortest total path": closest to TieMode::min
+  /// (its effect on loop closing is measured in docs/LOOP_CLOSING.md).
+  TieMode ties = TieMode::all;
   /// G, natural-log units: compute_index() leaves out nodes whose weight f(v) is below e^-G times
   /// the largest, which moves H by at most |V| e^-G (1 + G + ln|V|) / ln 2 bits. At least 1;
   /// +infinity evaluates every node. compute() never leaves any out.

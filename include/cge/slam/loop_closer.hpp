@@ -68,9 +68,11 @@ struct LoopCloserSettings {
   LoopScoring scoring = LoopScoring::combined;
   /// Step 1: candidates need at least this fraction of the best common-word count (ORB-SLAM2: 0.8).
   double min_common_words_ratio = 0.8;
-  /// Step 1: the keyframes with ids in [K - this, K) are never candidates (too recent to be a loop).
+  /// Step 1: the keyframes with ids in [K - this, K) are never candidates (too recent to be a loop;
+  /// ours, ORB-SLAM2's count of 10 keyframes, which it waits after a loop).
   int recent_keyframes_excluded = 10;
-  /// Step 2: covisible keyframes added to each candidate's group (paper: 10).
+  /// Step 2: covisible keyframes added to each candidate's group (ORB-SLAM2's 10 best covisible; the
+  /// paper gives no value).
   int group_size = 10;
   /// Step 3, modes cge and combined: least S_sum of the match. 0.5 loses no true loop on the loop
   /// presets while 0.8 already loses some (S_sum barely separates loops; geometry does): see
@@ -78,7 +80,8 @@ struct LoopCloserSettings {
   double min_cge_score = 0.5;
   /// Step 3, mode bow_only: least BoW L1 score of the match.
   double min_bow_score = 0.05;
-  /// Step 4: consecutive keyframes (the current one included) whose groups must chain; 1 disables.
+  /// Step 4: consecutive keyframes (the current one included) whose groups must chain; 1 disables
+  /// (ORB-SLAM2's consistency threshold 3; the paper gives no value).
   int consistent_keyframes = 3;
   /// Step 5: members of each verifiable group checked geometrically, best step-3 scores first; the
   /// one with the most PnP inliers is the match. The best-scored member is often a neighbouring,

@@ -1,10 +1,10 @@
 #pragma once
 // Training a bag-of-words vocabulary from images: ORB descriptors per image, then
-// cge::bow::Vocabulary::train. Used by the cge_vocab tool and by the pipeline when no vocabulary
-// file is given: train_vocabulary(source, first_frames) makes a default vocabulary from the first
-// frames of the sequence itself (a few seconds for 30 frames at 640 x 480, k = 10, L = 4), so no
-// vocabulary file has to be shipped. Such a vocabulary knows only the sequence's own start: fine for
-// the synthetic scenes, weaker than a large generic vocabulary on real data (docs/LOOP_CLOSING.md).
+// cge::bow::Vocabulary::train. Used by the cge_vocab tool and by cge_slam, which, for a rendered run
+// without a vocabulary file, trains one from frames of another rendered preset (never the frames it
+// evaluates), so no vocabulary file has to be shipped (a few seconds for 20 images at 640 x 480,
+// k = 10, L = 4). Such a vocabulary knows one synthetic room: fine there, weaker than a large generic
+// vocabulary on real data (docs/LOOP_CLOSING.md).
 
 #include <cstdint>
 #include <vector>
