@@ -147,6 +147,7 @@ struct Options {
   std::string loop_correction = "pgo+ba";                                        // none | pgo | pgo+ba
   // Depth term of the tracking refinement (0: pixels only) and local BA (on | off).
   double tracking_depth_sigma = cge::slam::TrackerSettings{}.refinement_depth_sigma_per_m;
+  bool tracking_depth_sigma_given = false;  ///< wins over the settings file's depth weight
   std::string local_ba = cge::slam::LocalMappingSettings{}.bundle_adjustment ? "on" : "off";
   int local_ba_window = cge::slam::LocalMappingSettings{}.covisible_keyframes;
   int local_ba_fixed = cge::slam::LocalMappingSettings{}.fixed_keyframes;
@@ -203,7 +204,7 @@ std::string short_number(double value) {
 
 // ---- settings ------------------------------------------------------------------------------------
 
-/// Camera, depth scale, ORB extractor and keyframe gap from an ORB-SLAM2 TUM YAML file.
+/// Camera, depth scale, depth weight, ORB extractor and keyframe gap from an ORB-SLAM2 TUM YAML file.
 void apply_settings_file(const fs::path& file, cge::PinholeIntrinsics<double>& intrinsics,
                          cge::slam::SystemSettings& settings) {
   cge::slam::apply_orbslam2_settings(cge::dataset::read_orbslam2_settings(file), intrinsics, settings);
@@ -588,6 +589,7 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
   // The tracking and mapping settings the run used (the flags that change the trajectory).
   const cge::slam::SystemSettings& used = system.settings();
   j["mapping_settings"] = {{"tracking_depth_sigma", used.tracker.refinement_depth_sigma_per_m},
+                           {"ba_depth_sigma", used.local_mapping.depth_sigma_per_m},
                            {"local_ba", used.local_mapping.bundle_adjustment ? "on" : "off"},
                            {"local_ba_window", used.local_mapping.covisible_keyframes},
                            {"local_ba_fixed", used.local_mapping.fixed_keyframes},
@@ -782,7 +784,6 @@ int run(Options opt) {
   settings.local_mapping.bundle_adjustment = opt.local_ba == "on";
   settings.local_mapping.covisible_keyframes = opt.local_ba_window;
   settings.local_mapping.fixed_keyframes = opt.local_ba_fixed;
-  settings.tracker.refinement_depth_sigma_per_m = opt.tracking_depth_sigma;
   settings.loop_correction.bundle_adjustment = opt.loop_correction == "pgo+ba";
   if (opt.frames_given && opt.frames < 1) {
     throw UsageError("--frames must be at least 1, got " + std::to_string(opt.frames) + " (omit it for every frame)");
@@ -932,6 +933,8 @@ int run(Options opt) {
     apply_temporal_filter(opt.temporal_filter, opt.temporal_overlap, seg);
     if (cge::slam::uses_masks(settings.mode)) segmenter = cge::dataset::make_segmenter(seg, opt.dataset);
   }
+  // After the settings file, which sets the depth weight of tracking and BA (cge.DepthSigmaPerMetre or 1 / bf).
+  if (opt.tracking_depth_sigma_given) settings.tracker.refinement_depth_sigma_per_m = opt.tracking_depth_sigma;
   try {
     settings.validate();
   } catch (const std::invalid_argument& e) {
@@ -1133,7 +1136,8 @@ int main(int argc, char** argv) {
                  "depth term of the tracking refinement: sigma_z = X * z^2 per matched keypoint with depth, 1/m; 0 = "
                  "pixels only")
       ->check(cge_tool::at_least_zero())
-      ->capture_default_str();
+      ->capture_default_str()
+      ->each([&opt](const std::string&) { opt.tracking_depth_sigma_given = true; });
   app.add_option("--local-ba", opt.local_ba,
                  "local bundle adjustment of the new keyframe's covisible window after each keyframe insertion "
                  "(timed as local_mapping)")
