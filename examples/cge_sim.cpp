@@ -5,7 +5,9 @@
 // when standard error is a terminal (nothing per frame otherwise, so logs stay clean).
 // Exit codes: 0 success; 1 the sequence could not be made or written (a file that cannot be
 // written, no renderer in this build); 2 bad usage or bad input (unknown preset, zero frames, a
-// non-empty output folder without --force, a setting out of range).
+// non-empty output folder without --force, a file of the sequence blocked by a folder of that name
+// or the reverse, a setting out of range). A failed run leaves --out as it was (the sequence is
+// staged in a hidden folder inside it; a run killed by a signal may leave that folder behind).
 
 #include <algorithm>
 #include <chrono>
@@ -15,6 +17,7 @@
 #include <cstdio>
 #include <deque>
 #include <exception>
+#include <filesystem>
 #include <future>
 #include <memory>
 #include <stdexcept>
@@ -186,7 +189,23 @@ int run(Options opt) {
   const cge::sim::SegmentationErrorModel model(source->instances(), opt.seed, opt.errors);
   cge::sim::WriteProgress progress;
   if (::isatty(::fileno(stderr))) progress = [&](int done, int total) { progress_bar.draw(done, total, elapsed_s()); };
-  write_overlapped(*source, model, opt.out, opt.writer, progress);
+  // All or nothing: the sequence is written into a hidden staging folder inside --out and moved
+  // into place only when complete (a failed run leaves --out as it was, the staging folder removed).
+  cge_tool::CreatedFolders created;  // --out and its parents when missing: removed again if left empty
+  created.create(opt.out, "--out");
+  const std::filesystem::path staging =
+      std::filesystem::path(opt.out) / (".cge_sim.partial." + std::to_string(::getpid()));
+  struct RemoveStaging {
+    std::filesystem::path path;
+    ~RemoveStaging() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+    }
+  } remove_staging{staging};
+  cge::sim::TumWriterSettings writer = opt.writer;
+  writer.force = false;  // the staging folder is new
+  write_overlapped(*source, model, staging, writer, progress);
+  cge_tool::move_staged_tree(staging, opt.out);
 
   std::printf("wrote %d frames of %s (seed %llu) to %s in %.1f s\n", source->frame_count(), opt.preset.c_str(),
               static_cast<unsigned long long>(opt.seed), opt.out.c_str(), elapsed_s());

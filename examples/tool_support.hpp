@@ -252,4 +252,36 @@ int run_reporting_errors(const char* program, ProgressBar* progress, Body&& body
   }
 }
 
+/// Moves the tree `staging` into `out`: folders merge, files replace same-named files, anything
+/// else in `out` stays. Every destination is checked before the first move, so one that is blocked
+/// (a folder where a file goes, or the reverse) moves nothing: UsageError naming it. `staging` is
+/// removed afterwards.
+inline void move_staged_tree(const std::filesystem::path& staging, const std::filesystem::path& out) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> entries;  // relative to staging
+  for (const fs::directory_entry& e : fs::recursive_directory_iterator(staging)) {
+    entries.push_back(e.path().lexically_relative(staging));
+  }
+  std::sort(entries.begin(), entries.end());  // element-wise: a folder before its contents
+  std::error_code ec;
+  for (const fs::path& rel : entries) {
+    const fs::file_status destination = fs::status(out / rel, ec);
+    const bool folder = fs::is_directory(staging / rel);
+    if (folder && fs::exists(destination) && !fs::is_directory(destination)) {
+      throw UsageError("--out: '" + (out / rel).string() + "' is a file where a folder goes; nothing was written");
+    }
+    if (!folder && fs::is_directory(destination)) {
+      throw UsageError("--out: '" + (out / rel).string() + "' is a folder where a file goes; nothing was written");
+    }
+  }
+  for (const fs::path& rel : entries) {
+    if (fs::is_directory(staging / rel)) {
+      fs::create_directory(out / rel);  // no-op when it is there
+    } else {
+      fs::rename(staging / rel, out / rel);
+    }
+  }
+  fs::remove_all(staging);
+}
+
 }  // namespace cge_tool

@@ -7,6 +7,7 @@
 # 5. --no-depth-noise changes the depth images only (and says so in the text files' header).
 # 6. --walking-speed and --pause-s change the people (masks) and are recorded; their defaults given
 #    explicitly change nothing; a negative pause is refused (exit 2).
+# 7. a --force run whose destination is blocked moves nothing and leaves the folder as it was.
 cmake_minimum_required(VERSION 3.16)
 
 foreach(var EXE WORK)
@@ -114,3 +115,22 @@ if(NOT defaults_changed EQUAL 0)
   message(FATAL_ERROR "${defaults_changed} files differ with the default people motions given explicitly")
 endif()
 run_sim(2 --out "${WORK}/bad_pause" --pause-s -1)
+
+# 7. All or nothing: with --force, a destination blocked by a folder of a file's name fails with
+#    exit 2 naming it, and the folder is as it was (the user's file, the blocking folder, nothing
+#    else, no staging folder).
+file(MAKE_DIRECTORY "${WORK}/blocked/groundtruth.txt")
+file(WRITE "${WORK}/blocked/user_notes.txt" "keep me\n")
+run_sim(2 --out "${WORK}/blocked" --force)
+if(NOT last_stderr MATCHES "groundtruth\\.txt' is a folder where a file goes")
+  message(FATAL_ERROR "the blocked run does not name the blocked destination: ${last_stderr}")
+endif()
+file(GLOB blocked_entries RELATIVE "${WORK}/blocked" LIST_DIRECTORIES true "${WORK}/blocked/*" "${WORK}/blocked/.*")
+list(SORT blocked_entries)
+if(NOT blocked_entries STREQUAL "groundtruth.txt;user_notes.txt")
+  message(FATAL_ERROR "a failed --force run changed the folder: ${blocked_entries}")
+endif()
+file(READ "${WORK}/blocked/user_notes.txt" kept)
+if(NOT kept STREQUAL "keep me\n")
+  message(FATAL_ERROR "a failed --force run changed the user's file")
+endif()
