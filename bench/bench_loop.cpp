@@ -47,9 +47,7 @@ struct LoopBenchScene {
 const LoopBenchScene& loop_scene() {
   static const LoopBenchScene scene = [] {
     LoopBenchScene s;
-    cge::sim::PresetSettings settings;
-    settings.loop_laps = 2;
-    s.spec = cge::sim::make_preset("loop_dynamic", 100, 5, settings);
+    s.spec = cge::sim::make_preset("loop_dynamic", 100, 5, cge::sim::repeated_room_loop_settings(2));
     const cge::sim::SequenceRenderer renderer(s.spec);
     std::vector<cv::Mat> first;
     for (int i = 0; i < renderer.frame_count(); ++i) {

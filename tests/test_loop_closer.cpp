@@ -50,9 +50,8 @@ const LoopScene& scene(const std::string& preset) {
   auto it = cache.find(preset);
   if (it != cache.end()) return *it->second;
   auto s = std::make_unique<LoopScene>();
-  cge::sim::PresetSettings settings;
-  settings.loop_laps = kLaps;
-  s->spec = cge::sim::make_preset(preset, kFrames, 5, settings);
+  // The whole room repeats on every lap: every frame of lap 2 revisits a place.
+  s->spec = cge::sim::make_preset(preset, kFrames, 5, cge::sim::repeated_room_loop_settings(kLaps));
   const cge::sim::SequenceRenderer renderer(s->spec);
   for (int i = 0; i < renderer.frame_count(); ++i) {
     const cge::sim::RenderedFrame f = renderer.render(i);
@@ -379,8 +378,6 @@ TEST_CASE("LoopCloser: a host's BoW model plugs in; bad input is refused", "[loo
 
 TEST_CASE("train_vocabulary: from a sequence's first frames, deterministic", "[bow][loop]") {
   const LoopScene& s = scene("loop_dynamic");
-  cge::sim::PresetSettings settings;
-  settings.loop_laps = kLaps;
   const cge::sim::RendererFrameSource<cge::sim::SequenceRenderer> source{cge::sim::SequenceRenderer(s.spec)};
   cge::slam::VocabularyTrainingSettings vs;
   vs.vocabulary.depth = 3;

@@ -28,9 +28,8 @@ cge::GraphEntropies<double> study_entropies(const cge::slam::Keyframe& kf, const
 }  // namespace
 
 TEST_CASE("cge_loop_study's recipe gives the LoopCloser's S_sum", "[loop_study][loop]") {
-  cge::sim::PresetSettings preset;
-  preset.loop_laps = 2;
-  const cge::sim::SequenceSpec spec = cge::sim::make_preset("loop_dynamic", 40, 5, preset);
+  const cge::sim::SequenceSpec spec =
+      cge::sim::make_preset("loop_dynamic", 40, 5, cge::sim::repeated_room_loop_settings(2));
   const cge::sim::SequenceRenderer renderer(spec);
   std::vector<cge::slam::Keyframe> keyframes;
   std::vector<cv::Mat> images;

@@ -51,9 +51,8 @@ double keyframe_error_m(const std::vector<Eigen::Isometry3d>& estimated, const s
 
 TEST_CASE("System with a loop closer: an accepted loop is corrected and the keyframe drift shrinks",
           "[slam][loop_correction]") {
-  cge::sim::PresetSettings preset;
-  preset.loop_laps = kLaps;
-  const cge::sim::SequenceRenderer renderer(cge::sim::make_preset("loop_dynamic", kFrames, 1, preset));
+  const cge::sim::SequenceRenderer renderer(
+      cge::sim::make_preset("loop_dynamic", kFrames, 1, cge::sim::repeated_room_loop_settings(kLaps)));
   std::vector<cge::sim::RenderedFrame> frames;
   for (int i = 0; i < renderer.frame_count(); ++i) frames.push_back(renderer.render(i));
   std::vector<cv::Mat> training;

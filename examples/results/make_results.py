@@ -63,13 +63,13 @@ class Plan:
     """Sequence lengths and seeds of one suite run."""
 
     walking_frames: int
-    loop_frames: int  # not a multiple of the 3 laps, so that no lap repeats another's poses
+    loop_frames: int  # the loop scenes' length: 751 frames hold their 8 revisits (docs/SIMULATION.md)
     vocabulary_frames: int
     study_step: int  # every study_step-th frame of a loop scene enters the entropy study
     seed: int = 1
 
 
-FULL = Plan(walking_frames=300, loop_frames=451, vocabulary_frames=20, study_step=3)
+FULL = Plan(walking_frames=300, loop_frames=751, vocabulary_frames=20, study_step=3)
 QUICK = Plan(walking_frames=30, loop_frames=91, vocabulary_frames=5, study_step=6)
 
 

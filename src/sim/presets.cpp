@@ -33,8 +33,13 @@ const Eigen::Vector3d kDeskViewTarget(0.0, 2.5, 0.9);
 constexpr double kLoopEyeHeight = 1.2;
 constexpr double kLoopPitchDeg = 8;    // camera looks this much down
 constexpr double kRevisitAngle = 0.0;  // the revisited place: the camera at (r, 0) looking east
-constexpr double kCrossingX = 2.1;     // the pedestrian crosses along this line (in front of the bookshelf)
-constexpr double kCrossingHalfLength = 1.5;
+// Glances: their centres spread evenly over this arc of the circle, away from the place (degrees).
+constexpr double kGlanceArcFromDeg = 75;
+constexpr double kGlanceArcToDeg = 285;
+// The screen: flat panels of at most this angle at the centre; each lap's screen stands this much
+// inside the previous one (so the newest hides the older), metres.
+constexpr double kScreenPanelDeg = 20;
+constexpr double kScreenLapStepM = 0.003;
 
 /// Deterministic random numbers for scene variation (splitmix64; portable, unlike std distributions).
 class Rng {
@@ -485,10 +490,10 @@ Eigen::Isometry3d static_pose(double t, const Phases& ph) {
   return T;
 }
 
-/// Circling the room counter-clockwise, looking outwards; angle 0 is the revisited place.
-Eigen::Isometry3d loop_pose(double angle_rad, double radius_m) {
+/// Circling the room counter-clockwise, looking outwards (up by glance_deg); angle 0 is the revisited place.
+Eigen::Isometry3d loop_pose(double angle_rad, double radius_m, double glance_deg = 0) {
   const Eigen::Vector3d eye(radius_m * std::cos(angle_rad), radius_m * std::sin(angle_rad), kLoopEyeHeight);
-  const double pitch = kLoopPitchDeg * kDegToRad;
+  const double pitch = (kLoopPitchDeg - glance_deg) * kDegToRad;
   const Eigen::Vector3d forward(std::cos(angle_rad) * std::cos(pitch), std::sin(angle_rad) * std::cos(pitch),
                                 -std::sin(pitch));
   return look_along(eye, forward);
@@ -514,9 +519,98 @@ void validate_preset_settings(const PresetSettings& s) {
   }
   if (!positive(s.crossing_time_s))
     throw std::invalid_argument("PresetSettings.crossing_time_s must be finite and > 0");
+  if (!(std::isfinite(s.crossing_distance_m) && s.crossing_distance_m > 0.4 && s.crossing_distance_m < 2.2))
+    throw std::invalid_argument("PresetSettings.crossing_distance_m must be in (0.4, 2.2) metres");
+  if (!positive(s.crossing_half_length_m) || s.crossing_half_length_m > 3)
+    throw std::invalid_argument("PresetSettings.crossing_half_length_m must be in (0, 3] metres");
+  if (!(std::isfinite(s.crossing_angle_deg) && s.crossing_angle_deg >= 0 && s.crossing_angle_deg <= 80))
+    throw std::invalid_argument("PresetSettings.crossing_angle_deg must be in [0, 80]");
+  if (!(std::isfinite(s.added_objects_distance_m) && s.added_objects_distance_m >= 0.5 &&
+        s.added_objects_distance_m <= 2))
+    throw std::invalid_argument("PresetSettings.added_objects_distance_m must be in [0.5, 2] metres");
+  if (!(std::isfinite(s.crossing_jitter_s) && s.crossing_jitter_s >= 0))
+    throw std::invalid_argument("PresetSettings.crossing_jitter_s must be finite and >= 0");
+  if (!(s.loop_screen_radius_m == 0 ||
+        (std::isfinite(s.loop_screen_radius_m) && s.loop_screen_radius_m > s.loop_radius_m + 0.4 &&
+         s.loop_screen_radius_m <= 2.9)))
+    throw std::invalid_argument("PresetSettings.loop_screen_radius_m must be 0 or in (loop_radius_m + 0.4, 2.9]");
+  if (!(positive(s.loop_screen_opening_deg) && s.loop_screen_opening_deg < 90))
+    throw std::invalid_argument("PresetSettings.loop_screen_opening_deg must be in (0, 90)");
+  if (!(std::isfinite(s.loop_glance_pitch_deg) && s.loop_glance_pitch_deg >= 0 && s.loop_glance_pitch_deg <= 60))
+    throw std::invalid_argument("PresetSettings.loop_glance_pitch_deg must be in [0, 60]");
+  if (!(std::isfinite(s.loop_margin_deg) && s.loop_margin_deg >= 0 && s.loop_margin_deg <= 180))
+    throw std::invalid_argument("PresetSettings.loop_margin_deg must be in [0, 180]");
+  if (!(positive(s.loop_glance_half_arc_deg) && s.loop_glance_half_arc_deg <= 90))
+    throw std::invalid_argument("PresetSettings.loop_glance_half_arc_deg must be in (0, 90]");
+}
+
+/// Circle angle of frame i, radians: from margin before the place to margin after the laps-th
+/// return to it, at constant speed (margin 0: exactly laps turns from the place).
+double loop_angle_rad(int i, int frames, int laps, double margin_deg) {
+  const double turns = laps + 2 * margin_deg / 360.0;
+  return kRevisitAngle + 2 * kPi * turns * static_cast<double>(i) / frames - margin_deg * kDegToRad;
+}
+
+/// The frame at which the camera passes the place for the pass-th time (0: the first visit): the
+/// first frame at or past it.
+int pass_frame(int pass, int frames, int laps, double margin_deg) {
+  const double fraction = (margin_deg + 360.0 * pass) / (360.0 * laps + 2 * margin_deg);
+  return static_cast<int>(std::ceil(fraction * frames - 1e-9));
+}
+
+/// How far up the camera looks at circle angle `angle_deg` on lap `lap` (lap k runs from pass k-1
+/// to pass k), degrees. Laps 2 .. laps glance once, each at a centre of its own; a raised cosine over
+/// +-half_arc around it.
+double glance_deg(const PresetSettings& s, int lap, double angle_deg) {
+  const int laps = s.loop_laps;
+  if (lap < 2 || lap > laps || s.loop_glance_pitch_deg == 0) return 0;
+  const double centre = laps == 2 ? 0.5 * (kGlanceArcFromDeg + kGlanceArcToDeg)
+                                  : kGlanceArcFromDeg + (kGlanceArcToDeg - kGlanceArcFromDeg) * (lap - 2) / (laps - 2);
+  const double offset = std::abs(std::remainder(angle_deg - centre, 360.0));
+  if (offset >= s.loop_glance_half_arc_deg) return 0;
+  const double c = std::cos(0.5 * kPi * offset / s.loop_glance_half_arc_deg);
+  return s.loop_glance_pitch_deg * c * c;
+}
+
+/// The screen of lap `lap`: floor-to-ceiling panels on a circle round the centre, leaving the
+/// opening towards the place; it exists from the lap's first frame, a little inside the last one.
+void add_lap_screen(SceneBuilder& b, const PresetSettings& s, int lap, int first_frame) {
+  const double radius = s.loop_screen_radius_m - kScreenLapStepM * lap;
+  const double from = s.loop_screen_opening_deg * kDegToRad, to = 2 * kPi - from;
+  const int panels = static_cast<int>(std::ceil((to - from) / (kScreenPanelDeg * kDegToRad)));
+  const double step = (to - from) / panels;
+  Rng& r = b.rng();
+  for (int j = 0; j < panels; ++j) {
+    const double mid = from + (j + 0.5) * step;
+    const Eigen::Vector3d inward(-std::cos(mid), -std::sin(mid), 0);
+    const Eigen::Vector3d centre = -inward * radius * std::cos(0.5 * step);
+    const Material m =
+        b.material(Pattern::blocks, rgb(r.uniform(0.5, 0.95), r.uniform(0.5, 0.95), r.uniform(0.5, 0.95)),
+                   rgb(r.uniform(0.05, 0.45), r.uniform(0.05, 0.45), r.uniform(0.05, 0.45)),
+                   r.uniform(0.04, 0.06));  // small cells: texture to track at 0.6 m
+    // Half width a little over the chord's so neighbouring panels meet without a gap.
+    Primitive p =
+        make_quad(centre + Eigen::Vector3d(0, 0, kRoomHeight / 2), inward, Eigen::Vector3d::UnitZ().cross(inward),
+                  radius * std::sin(0.5 * step) + 0.01, kRoomHeight / 2 - 0.002, m);
+    b.add(p, first_frame);
+  }
 }
 
 }  // namespace
+
+PresetSettings repeated_room_loop_settings(int laps) {
+  PresetSettings s;
+  s.loop_laps = laps;
+  s.loop_margin_deg = 0;
+  s.loop_screen_radius_m = 0;
+  s.loop_glance_pitch_deg = 0;
+  s.crossing_time_s = 3.0;
+  s.crossing_distance_m = 1.0;
+  s.crossing_half_length_m = 1.5;
+  s.crossing_angle_deg = 0;
+  s.crossing_jitter_s = 0;
+  return s;
+}
 
 std::vector<std::string> preset_names() {
   return std::vector<std::string>(std::begin(kPresetNames), std::end(kPresetNames));
@@ -575,36 +669,62 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
     }
   } else {
     const int laps = settings.loop_laps;
+    const double margin = settings.loop_margin_deg;
     for (int i = 0; i < frames; ++i) {
-      const double angle = kRevisitAngle + 2 * kPi * laps * static_cast<double>(i) / frames;
-      spec.T_world_camera.push_back(loop_pose(angle, settings.loop_radius_m));
+      const double angle = loop_angle_rad(i, frames, laps, margin);
+      const double angle_deg = (angle - kRevisitAngle) / kDegToRad;
+      const int lap = static_cast<int>(std::floor(angle_deg / 360.0)) + 1;  // 0 before the first visit
+      spec.T_world_camera.push_back(loop_pose(angle, settings.loop_radius_m, glance_deg(settings, lap, angle_deg)));
     }
-    const double lap_s = duration_s / laps;
+    if (settings.loop_screen_radius_m > 0) {
+      // A new screen at every pass of the place (while the camera looks through the opening).
+      for (int pass = 0; pass <= laps; ++pass) {
+        add_lap_screen(builder, settings, pass, pass == 0 ? 0 : pass_frame(pass, frames, laps, margin));
+      }
+    }
+    const double lap_s = duration_s * 360.0 / (360.0 * laps + 2 * margin);
     if (name == "loop_dynamic") {
-      // A pedestrian crosses in front of the camera each time it comes back to the place.
+      // A pedestrian crosses close in front of the camera each time it comes back to the place.
       Person walker = make_person(builder, Posture::walking);
       const double crossing_s = std::min(settings.crossing_time_s, 0.5 * lap_s);
-      for (int lap = 1; lap < laps; ++lap) {
+      const Eigen::Vector2d middle(settings.loop_radius_m + settings.crossing_distance_m, 0);
+      const double a = settings.crossing_angle_deg * kDegToRad;
+      const Eigen::Vector2d half = settings.crossing_half_length_m * Eigen::Vector2d(std::sin(a), std::cos(a));
+      const int revisits = margin > 0 ? laps : laps - 1;  // without a margin the last return is not filmed
+      for (int lap = 1; lap <= revisits; ++lap) {
         const double sign = (lap % 2 == 1) ? 1.0 : -1.0;
-        const double at = lap * lap_s;
-        walker.path.push_back({at - crossing_s / 2, Eigen::Vector2d(kCrossingX, -sign * kCrossingHalfLength)});
-        walker.path.push_back({at + crossing_s / 2, Eigen::Vector2d(kCrossingX, sign * kCrossingHalfLength)});
+        // Crossings of neighbouring revisits never overlap in short sequences: the jitter is at most
+        // a quarter lap, the crossing at most half a lap.
+        const double at = duration_s * (margin + 360.0 * lap) / (360.0 * laps + 2 * margin) +
+                          rng.uniform(-1, 1) * std::min(settings.crossing_jitter_s, 0.2 * lap_s);
+        const Eigen::Vector2d along(half.x(), sign * half.y());  // always away from the camera
+        walker.path.push_back({at - crossing_s / 2, middle - along});
+        walker.path.push_back({at + crossing_s / 2, middle + along});
         walker.visible_s.emplace_back(at - crossing_s / 2, at + crossing_s / 2);
       }
       spec.people.push_back(walker);
     } else {
-      // Objects appear at the place half a lap in, while the camera looks the other way.
-      const int appear = static_cast<int>(std::lround(0.5 * frames / laps));
-      add_chair(builder, {2.45, -0.45}, kPi / 2 + rng.uniform(-0.3, 0.3), appear);  // facing the camera
-      add_plant(builder, {2.5, 0.15}, 0.7, appear);
-      const std::uint16_t suitcase = builder.object("suitcase");
-      builder.box({2.8, 0.6, 0.33}, {0.12, 0.22, 0.32}, rng.uniform(-0.3, 0.3),
-                  builder.material(Pattern::blocks, rgb(0.25, 0.3, 0.45), rgb(0.1, 0.12, 0.2), 0.12), suitcase, appear);
-      const std::uint16_t backpack = builder.object("backpack");  // on the chair's seat
-      builder.add(
-          make_ellipsoid({2.45, -0.45, kSeatZ + 0.035 + 0.19}, {0.12, 0.16, 0.2}, 0.4,
-                         builder.material(Pattern::checks, rgb(0.75, 0.35, 0.1), rgb(0.2, 0.2, 0.2), 0.08), backpack),
-          appear);
+      // As in the paper's experiment: two chairs, a laptop and an umbrella appear at the place half a
+      // lap in, while the camera looks the other way.
+      const int appear = static_cast<int>(std::lround(frames * (margin + 180.0) / (360.0 * laps + 2 * margin)));
+      const double x0 = settings.loop_radius_m + settings.added_objects_distance_m;  // the chairs' line
+      add_chair(builder, {x0, -0.35}, kPi / 2 + rng.uniform(-0.3, 0.3), appear);     // facing the camera
+      add_chair(builder, {x0 + 0.05, 0.4}, kPi / 2 + rng.uniform(-0.3, 0.3), appear);
+      {
+        const std::uint16_t laptop = builder.object("laptop");  // open, on the first chair's seat
+        const double seat = kSeatZ + 0.035;
+        builder.box({x0, -0.35, seat + 0.01}, {0.12, 0.16, 0.01}, 0,
+                    builder.material(Pattern::tiles, rgb(0.7, 0.7, 0.72), rgb(0.2, 0.2, 0.2), 0.018), laptop, appear);
+        builder.box({x0 + 0.13, -0.35, seat + 0.13}, {0.01, 0.16, 0.11}, 0,
+                    builder.material(Pattern::screen, rgb(0.2, 0.5, 0.3), rgb(0.6, 0.3, 0.5), 0.05), laptop, appear);
+      }
+      {
+        // Open, standing on its handle behind the chairs: a canopy of 0.5 m radius at 1.1 m height.
+        const std::uint16_t umbrella = builder.object("umbrella");
+        const Material cloth = builder.material(Pattern::checks, rgb(0.15, 0.2, 0.55), rgb(0.8, 0.75, 0.2), 0.06);
+        builder.add(make_capsule({x0 + 0.35, 0.0, 0.05}, {x0 + 0.35, 0.0, 1.1}, 0.015, cloth, umbrella), appear);
+        builder.add(make_ellipsoid({x0 + 0.35, 0.0, 1.1}, {0.5, 0.5, 0.18}, 0, cloth, umbrella), appear);
+      }
     }
     spec.loops = ground_truth_loops(spec.T_world_camera, settings.loops);
   }

@@ -8,10 +8,13 @@
 //   walking_rpy         camera rotating about roll, pitch, yaw in place; two people walking
 //   walking_static      camera almost still; two people walking
 //   sitting_xyz         camera translating along x, y, z; two people sitting, moving little
-//   loop_dynamic        camera circling the room (laps); a pedestrian crosses in front of it at the
-//                       revisited place on every lap after the first
-//   loop_structure_change  camera circling the room; objects appear at the revisited place after the
-//                       first lap (while the camera looks the other way)
+//   loop_dynamic        camera circling the room (8 laps after the first visit); a pedestrian crosses
+//                       close in front of it at every revisit of the place
+//   loop_structure_change  camera circling the room; two chairs, a laptop and an umbrella appear at the
+//                       revisited place after the first visit (while the camera looks the other way)
+// In the loop scenes a screen round the camera's circle hides the room except the place and shows a
+// new pattern on every lap, and each lap glances up once at a place of its own: only the place
+// recurs, and each revisit is a separate loop event (docs/SIMULATION.md).
 //
 // The seed varies the textures, clothes, body heights, paths and trajectory phases, and the depth
 // noise; the room layout, the motions' kind and the loops' place stay the same.
@@ -47,11 +50,55 @@ struct PresetSettings {
   /// Walking presets: how long the second person stands still at each of its stops, seconds, >= 0
   /// (long pauses let a person enter a map as static before walking on).
   double pause_s = 1.5;
-  int loop_laps = 3;               ///< loop scenes: laps of the room, >= 2
+  /// Loop scenes: laps of the room after the first visit of the place, >= 2. The camera starts
+  /// loop_margin_deg before the place and stops loop_margin_deg after its last return: it revisits
+  /// the place loop_laps times (8: the paper's robot experiment, 8 laps with one loop each, Table 6).
+  int loop_laps = 8;
+  /// Loop scenes: how far before the place the camera starts and after its last return it stops,
+  /// degrees of the circle, in [0, 180] (60: every visit has views on both sides of the place; 0:
+  /// exactly loop_laps turns from the place, which it then revisits loop_laps - 1 times).
+  double loop_margin_deg = 60;
   double loop_radius_m = 1.1;      ///< loop scenes: radius of the camera's circle, metres, in (0, 1.6]
-  double crossing_time_s = 3.0;    ///< loop_dynamic: time the pedestrian takes to cross, seconds, > 0
+  double crossing_time_s = 1.2;    ///< loop_dynamic: time the pedestrian takes to cross, seconds, > 0
+  /// loop_dynamic: distance from the camera at the revisited place to the pedestrian's line, metres,
+  /// in (0.4, 2.2) (0.4: the depth sensor's blind zone). Chosen so the person hides most of the view.
+  double crossing_distance_m = 0.5;
+  /// loop_dynamic: half the length of the pedestrian's crossing, metres, in (0, 3].
+  double crossing_half_length_m = 0.6;
+  /// loop_dynamic: angle between the pedestrian's line and the camera's image plane at the place,
+  /// degrees, in [0, 80]: 0 crosses straight (the camera sees the person's side), 45 walks past
+  /// diagonally, away from the camera, showing more of the body.
+  double crossing_angle_deg = 30;
+  /// loop_dynamic: the middle of each crossing is this much at most before or after the camera
+  /// passes the place (drawn per revisit from the seed), seconds, >= 0: some revisits are hidden
+  /// more than others.
+  double crossing_jitter_s = 0.3;
+  /// loop_structure_change: distance from the camera at the place to the added chairs, metres, in
+  /// [0.5, 2] (the laptop on one, the umbrella 0.35 m behind them).
+  double added_objects_distance_m = 0.65;
+  /// Loop scenes: a cylindrical screen of this radius around the room's centre hides the room except
+  /// an opening towards the revisited place; its pattern is new on every lap (the route away from the
+  /// place looks different each time, as a robot's longer route would), metres, 0 = no screen (the
+  /// whole room repeats), else in (loop_radius_m + 0.4, 2.9].
+  double loop_screen_radius_m = 1.7;
+  /// Half the opening of the screen, as an angle at the room's centre, degrees, in (0, 90).
+  /// 15: just over what the camera sees of the screen from the place (11.5 degrees at the defaults)
+  /// plus one frame's turn, so the screen changes unseen; the place shows only near the place.
+  double loop_screen_opening_deg = 15;
+  /// Each lap after the first the camera looks up once, by this much at the peak, at a place on the
+  /// circle of its own; no earlier lap had that pose, so each revisit of the place is a separate loop
+  /// event (a run of loop keyframes). Degrees, >= 0 (0: no glances). More than the ground truth's
+  /// max_angle_deg with margin: at 35 the peak differs from every other lap's pose by at least 25.
+  double loop_glance_pitch_deg = 35;
+  /// Half the arc of the circle over which a glance rises and falls, degrees at the centre, > 0.
+  double loop_glance_half_arc_deg = 30;
   LoopSettings loops;              ///< how the ground-truth loops of the loop scenes are decided
 };
+
+/// Loop scenes whose laps repeat the whole room: no screen, no glances, loop_laps turns starting at
+/// the place, the pedestrian 1 m in front for 3 s. Every frame after the first lap revisits a place,
+/// so a run has one loop event; for tests of the loop closer's mechanics, not of the method.
+PresetSettings repeated_room_loop_settings(int laps);
 
 /// The preset names, in the order of the table above.
 std::vector<std::string> preset_names();

@@ -1,0 +1,258 @@
+// Tests of the loop scenes as the paper's robot experiment (cge/sim/presets.hpp, docs/SIMULATION.md):
+// 8 laps after the first visit of the place, each revisit a loop event of its own (the screen and
+// the glances), the pedestrian close in front of the camera at every revisit of loop_dynamic, the
+// objects of loop_structure_change absent at the first visit and present at every revisit, and
+// determinism. The visits and events are found from the poses and the loop list alone.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "cge/segmentation/coco_classes.hpp"
+#include "cge/sim/bodies.hpp"
+#include "cge/sim/presets.hpp"
+#include "cge/sim/renderer.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using cge::sim::SequenceSpec;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kFrames = 500;  // 60 frames per lap at the defaults (8 laps and 2 x 60 degrees of margin)
+
+struct Run {
+  int first = 0;
+  int last = 0;
+  bool contains(int i) const { return first <= i && i <= last; }
+};
+
+/// Maximal runs of consecutive frames of `frames` (sorted, distinct).
+std::vector<Run> runs_of(const std::vector<int>& frames) {
+  std::vector<Run> runs;
+  for (const int f : frames) {
+    if (runs.empty() || f != runs.back().last + 1) {
+      runs.push_back({f, f});
+    } else {
+      runs.back().last = f;
+    }
+  }
+  return runs;
+}
+
+/// The place: the camera at (1.1, 0, 1.2) m looking east, 8 degrees down (the defaults). Visits:
+/// runs of frames within the ground truth's 0.3 m and 20 degrees of it.
+std::vector<Run> visits_of_the_place(const SequenceSpec& spec) {
+  const Eigen::Vector3d place(1.1, 0, 1.2);
+  const Eigen::Vector3d axis(std::cos(8 * kPi / 180), 0, -std::sin(8 * kPi / 180));
+  std::vector<int> near;
+  for (std::size_t i = 0; i < spec.T_world_camera.size(); ++i) {
+    const Eigen::Isometry3d& T = spec.T_world_camera[i];
+    const double angle = std::acos(std::min(1.0, T.linear().col(2).dot(axis))) * 180 / kPi;
+    if ((T.translation() - place).norm() <= 0.3 && angle <= 20) near.push_back(static_cast<int>(i));
+  }
+  return runs_of(near);
+}
+
+/// The frame of a visit closest to the place.
+int closest_to_place(const SequenceSpec& spec, const Run& visit) {
+  const Eigen::Vector3d place(1.1, 0, 1.2);
+  int best = visit.first;
+  for (int i = visit.first; i <= visit.last; ++i) {
+    if ((spec.T_world_camera[static_cast<std::size_t>(i)].translation() - place).norm() <
+        (spec.T_world_camera[static_cast<std::size_t>(best)].translation() - place).norm()) {
+      best = i;
+    }
+  }
+  return best;
+}
+
+/// Loop events of the ground truth: runs of consecutive frames that are the query of a loop pair.
+std::vector<Run> loop_events(const SequenceSpec& spec) {
+  std::set<int> queries;
+  for (const auto& l : spec.loops) queries.insert(l.query_frame);
+  return runs_of(std::vector<int>(queries.begin(), queries.end()));
+}
+
+double fraction_of(const cv::Mat& labels, const std::set<int>& ids) {
+  int n = 0;
+  for (const int id : ids) n += cv::countNonZero(labels == id);
+  return static_cast<double>(n) / static_cast<double>(labels.total());
+}
+
+std::set<int> ids_of_class(const SequenceSpec& spec, int class_id) {
+  std::set<int> ids;
+  for (const auto& info : spec.instances) {
+    if (info.class_id == class_id) ids.insert(info.id);
+  }
+  return ids;
+}
+
+}  // namespace
+
+TEST_CASE("loop scenes: 8 laps; each revisit of the place is a loop event of its own", "[sim][presets][loops]") {
+  const cge::sim::PresetSettings defaults;
+  CHECK(defaults.loop_laps == 8);
+  for (const std::string name : {"loop_dynamic", "loop_structure_change"}) {
+    INFO(name);
+    const SequenceSpec spec = cge::sim::make_preset(name, kFrames, 3);
+    const std::vector<Run> visits = visits_of_the_place(spec);
+    // The first visit and 8 returns.
+    REQUIRE(visits.size() == 9);
+    const std::vector<Run> events = loop_events(spec);
+    REQUIRE(events.size() == 8);
+    // The first visit has no loop; every return lies in exactly one event, each event holds one.
+    for (const Run& e : events) CHECK_FALSE(e.contains(closest_to_place(spec, visits[0])));
+    for (std::size_t k = 1; k < visits.size(); ++k) {
+      INFO("revisit " << k);
+      const int at = closest_to_place(spec, visits[k]);
+      int holding = 0;
+      for (const Run& e : events) holding += e.contains(at) ? 1 : 0;
+      CHECK(holding == 1);
+      CHECK(events[k - 1].contains(at));
+    }
+    // Between two events the camera has a pose no earlier frame had: a frame with no loop.
+    for (std::size_t k = 1; k < events.size(); ++k) CHECK(events[k].first > events[k - 1].last + 1);
+    // Every listed pair is a revisit within the thresholds.
+    for (const auto& l : spec.loops) {
+      const auto& q = spec.T_world_camera[static_cast<std::size_t>(l.query_frame)];
+      const auto& m = spec.T_world_camera[static_cast<std::size_t>(l.match_frame)];
+      REQUIRE(l.match_frame < l.query_frame);
+      CHECK((q.translation() - m.translation()).norm() <= defaults.loops.max_distance_m);
+    }
+  }
+}
+
+TEST_CASE("loop_dynamic: the pedestrian is close in front of the camera at every revisit, not at the first visit",
+          "[sim][presets][loops]") {
+  const cge::sim::SequenceRenderer r(cge::sim::make_preset("loop_dynamic", kFrames, 3));
+  const std::set<int> people = ids_of_class(r.spec(), cge::kCocoPerson);
+  REQUIRE(people.size() == 1);
+  const std::vector<Run> visits = visits_of_the_place(r.spec());
+  REQUIRE(visits.size() == 9);
+  for (int i = visits[0].first; i <= visits[0].last; i += 2) {
+    CHECK(fraction_of(r.render(i).instance_labels, people) == 0);
+  }
+  REQUIRE(r.spec().people.size() == 1);
+  for (std::size_t k = 1; k < visits.size(); ++k) {
+    INFO("revisit " << k);
+    const cge::sim::RenderedFrame f = r.render(closest_to_place(r.spec(), visits[k]));
+    // A large part of the view, and near: within 1 m of the camera.
+    CHECK(fraction_of(f.instance_labels, people) >= 0.2);
+    const Eigen::Vector2d at = cge::sim::person_state(r.spec().people[0], f.timestamp_s).xy_m;
+    CHECK((at - f.T_world_camera.translation().head<2>()).norm() < 1.0);
+  }
+}
+
+TEST_CASE(
+    "loop_structure_change: two chairs, a laptop and an umbrella absent at the first visit, present at every "
+    "revisit",
+    "[sim][presets][loops]") {
+  const cge::sim::SequenceRenderer r(cge::sim::make_preset("loop_structure_change", kFrames, 3));
+  std::set<int> added;
+  int appear = kFrames;
+  for (const auto& p : r.spec().static_primitives) {
+    if (p.first_frame > 0 && p.instance_id != 0) {
+      added.insert(p.instance_id);
+      appear = std::min(appear, p.first_frame);
+    }
+  }
+  std::multiset<std::string> classes;
+  for (const auto& info : r.spec().instances) {
+    if (added.count(info.id) > 0) classes.insert(std::string(cge::coco_class_name(info.class_id)));
+  }
+  CHECK(classes == std::multiset<std::string>{"chair", "chair", "laptop", "umbrella"});
+  const std::vector<Run> visits = visits_of_the_place(r.spec());
+  REQUIRE(visits.size() == 9);
+  CHECK(appear > visits[0].last);
+  CHECK(appear < visits[1].first);
+  // They appear while the camera looks the other way (never popping into view).
+  const Eigen::Isometry3d T_camera_world = r.spec().T_world_camera[static_cast<std::size_t>(appear)].inverse();
+  for (const auto& p : r.spec().static_primitives) {
+    if (p.first_frame == appear && p.instance_id != 0) CHECK((T_camera_world * p.T_world_local.translation()).z() < 0);
+  }
+  CHECK(fraction_of(r.render(closest_to_place(r.spec(), visits[0])).instance_labels, added) == 0);
+  for (std::size_t k = 1; k < visits.size(); ++k) {
+    INFO("revisit " << k);
+    const cv::Mat labels = r.render(closest_to_place(r.spec(), visits[k])).instance_labels;
+    for (const int id : added) CHECK(cv::countNonZero(labels == id) > 0);
+    CHECK(fraction_of(labels, added) >= 0.1);
+  }
+}
+
+TEST_CASE("loop scenes: away from the place each lap shows a new screen; the place looks the same",
+          "[sim][presets][loops]") {
+  const cge::sim::SequenceRenderer r(cge::sim::make_preset("loop_structure_change", kFrames, 3));
+  const int per_lap = 60;  // kFrames / (8 + 1/3) turns: the poses repeat exactly every 60 frames
+  const std::vector<Run> visits = visits_of_the_place(r.spec());
+  REQUIRE(visits.size() == 9);
+  const int place2 = closest_to_place(r.spec(), visits[2]);
+  REQUIRE(closest_to_place(r.spec(), visits[3]) == place2 + per_lap);
+  const auto mean_difference = [&](int a, int b) {
+    CHECK(r.spec().T_world_camera[static_cast<std::size_t>(a)].isApprox(
+        r.spec().T_world_camera[static_cast<std::size_t>(b)], 1e-9));
+    cv::Mat grey_a, grey_b, diff;
+    r.render(a).rgb.convertTo(grey_a, CV_32F);
+    r.render(b).rgb.convertTo(grey_b, CV_32F);
+    cv::absdiff(grey_a, grey_b, diff);
+    return cv::mean(diff)[0];
+  };
+  // 30 degrees past the place: no glance of any lap there, only the screen in view.
+  const int away = place2 + per_lap / 12;
+  CHECK(mean_difference(away, away + per_lap) > 20);
+  CHECK(mean_difference(place2, place2 + per_lap) < 1);
+}
+
+TEST_CASE("loop scenes: same seed, same sequence; the seed changes the screens", "[sim][presets][loops]") {
+  for (const std::string name : {"loop_dynamic", "loop_structure_change"}) {
+    INFO(name);
+    const SequenceSpec a = cge::sim::make_preset(name, 200, 9);
+    const SequenceSpec b = cge::sim::make_preset(name, 200, 9);
+    REQUIRE(a.T_world_camera.size() == b.T_world_camera.size());
+    for (std::size_t i = 0; i < a.T_world_camera.size(); ++i) {
+      CHECK(a.T_world_camera[i].matrix() == b.T_world_camera[i].matrix());
+    }
+    REQUIRE(a.loops.size() == b.loops.size());
+    for (std::size_t i = 0; i < a.loops.size(); ++i) {
+      CHECK(a.loops[i].query_frame == b.loops[i].query_frame);
+      CHECK(a.loops[i].match_frame == b.loops[i].match_frame);
+    }
+    const cge::sim::SequenceRenderer ra(a), rb(b), rc(cge::sim::make_preset(name, 200, 10));
+    const cge::sim::RenderedFrame fa = ra.render(60), fb = rb.render(60), fc = rc.render(60);
+    CHECK(cv::countNonZero(fa.rgb.reshape(1) != fb.rgb.reshape(1)) == 0);
+    CHECK(cv::countNonZero(fa.depth != fb.depth) == 0);
+    CHECK(cv::countNonZero(fa.rgb.reshape(1) != fc.rgb.reshape(1)) > 0);
+  }
+}
+
+TEST_CASE("loop scenes: bad scene settings name the field", "[sim][presets][errors]") {
+  struct Bad {
+    void (*spoil)(cge::sim::PresetSettings&);
+    const char* field;
+  };
+  const Bad bad[] = {
+      {[](cge::sim::PresetSettings& s) { s.crossing_distance_m = 0.3; }, "crossing_distance_m"},
+      {[](cge::sim::PresetSettings& s) { s.crossing_half_length_m = 0; }, "crossing_half_length_m"},
+      {[](cge::sim::PresetSettings& s) { s.crossing_jitter_s = std::numeric_limits<double>::quiet_NaN(); },
+       "crossing_jitter_s"},
+      {[](cge::sim::PresetSettings& s) { s.loop_screen_radius_m = 1.2; }, "loop_screen_radius_m"},
+      {[](cge::sim::PresetSettings& s) { s.loop_screen_opening_deg = 0; }, "loop_screen_opening_deg"},
+      {[](cge::sim::PresetSettings& s) { s.loop_glance_pitch_deg = -1; }, "loop_glance_pitch_deg"},
+      {[](cge::sim::PresetSettings& s) { s.loop_glance_half_arc_deg = 0; }, "loop_glance_half_arc_deg"},
+      {[](cge::sim::PresetSettings& s) { s.loop_margin_deg = 200; }, "loop_margin_deg"},
+  };
+  for (const Bad& b : bad) {
+    cge::sim::PresetSettings settings;
+    b.spoil(settings);
+    CHECK_THAT(cge_test::invalid_argument_message([&] { cge::sim::make_preset("loop_dynamic", 50, 1, settings); }),
+               Catch::Contains(b.field));
+  }
+}
