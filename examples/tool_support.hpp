@@ -258,27 +258,31 @@ int run_reporting_errors(const char* program, ProgressBar* progress, Body&& body
 /// removed afterwards.
 inline void move_staged_tree(const std::filesystem::path& staging, const std::filesystem::path& out) {
   namespace fs = std::filesystem;
-  std::vector<fs::path> entries;  // relative to staging
+  struct Entry {
+    fs::path relative;  // to staging
+    bool folder = false;
+  };
+  std::vector<Entry> entries;
   for (const fs::directory_entry& e : fs::recursive_directory_iterator(staging)) {
-    entries.push_back(e.path().lexically_relative(staging));
+    entries.push_back({e.path().lexically_relative(staging), e.is_directory()});
   }
-  std::sort(entries.begin(), entries.end());  // element-wise: a folder before its contents
+  // Element-wise path order: a folder before its contents.
+  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.relative < b.relative; });
   std::error_code ec;
-  for (const fs::path& rel : entries) {
-    const fs::file_status destination = fs::status(out / rel, ec);
-    const bool folder = fs::is_directory(staging / rel);
-    if (folder && fs::exists(destination) && !fs::is_directory(destination)) {
-      throw UsageError("--out: '" + (out / rel).string() + "' is a file where a folder goes; nothing was written");
+  for (const Entry& e : entries) {
+    const fs::file_status destination = fs::status(out / e.relative, ec);
+    if (e.folder && fs::exists(destination) && !fs::is_directory(destination)) {
+      throw UsageError("--out: '" + (out / e.relative).string() + "' is a file where a folder goes; nothing was written");
     }
-    if (!folder && fs::is_directory(destination)) {
-      throw UsageError("--out: '" + (out / rel).string() + "' is a folder where a file goes; nothing was written");
+    if (!e.folder && fs::is_directory(destination)) {
+      throw UsageError("--out: '" + (out / e.relative).string() + "' is a folder where a file goes; nothing was written");
     }
   }
-  for (const fs::path& rel : entries) {
-    if (fs::is_directory(staging / rel)) {
-      fs::create_directory(out / rel);  // no-op when it is there
+  for (const Entry& e : entries) {
+    if (e.folder) {
+      fs::create_directory(out / e.relative);  // no-op when it is there
     } else {
-      fs::rename(staging / rel, out / rel);
+      fs::rename(staging / e.relative, out / e.relative);
     }
   }
   fs::remove_all(staging);

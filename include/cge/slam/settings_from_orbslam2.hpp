@@ -28,7 +28,7 @@ inline void apply_orbslam2_settings(const dataset::OrbSlam2Settings& file, Pinho
   frame.orb.min_fast_threshold = file.orb.min_fast_threshold;
   // Real Kinect frames carry depth errors beyond the sensor's noise (registration to the colour
   // image, timing during fast motion): on the real fr1/rpy slice the tight rendered weight (0.003)
-  // flagged a fifth of the local BA's observations as outliers (docs/REAL_DATA.md).
+  // flagged a quarter of the local BA's observations as outliers (docs/REAL_DATA.md).
   const double depth_sigma_per_m = file.depth_sigma_per_m();
   settings.tracker.refinement_depth_sigma_per_m = depth_sigma_per_m;
   settings.local_mapping.depth_sigma_per_m = depth_sigma_per_m;
