@@ -140,8 +140,10 @@ struct Options {
   bool frames_given = false;
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   int keyframe_interval = cge::PatchKeyframeSettings<double>{}.interval_frames;  // mode YMK: k
+  double keyframe_tracking_ratio = cge::PatchKeyframeSettings<double>{}.tracking_ratio;  // mode YMK
   int orb_spread = cge::slam::OrbSettings{}.spread_oversampling;
   int local_ba_iterations = cge::slam::LocalMappingSettings{}.bundle.solver.max_iterations;
+  int local_ba_rounds_per_frame = cge::slam::LocalMappingSettings{}.ba_rounds_per_frame;
   std::string map_maintenance = "all";
   int keyframe_min_gap = cge::slam::SystemSettings{}.orbslam2_keyframes.min_frame_gap;
   std::string loop_correction = "pgo+ba";                                        // none | pgo | pgo+ba
@@ -595,9 +597,11 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
                            {"local_ba_fixed", used.local_mapping.fixed_keyframes},
                            {"reference_min_observations", used.mapping.reference_min_observations},
                            {"keyframe_interval", used.patch_keyframes.interval_frames},
+                           {"keyframe_tracking_ratio", used.patch_keyframes.tracking_ratio},
                            {"keyframe_min_gap", used.orbslam2_keyframes.min_frame_gap},
                            {"orb_spread", used.frame.orb.spread_oversampling},
                            {"local_ba_iterations", used.local_mapping.bundle.solver.max_iterations},
+                           {"local_ba_rounds_per_frame", used.local_mapping.ba_rounds_per_frame},
                            {"map_maintenance", opt.map_maintenance},
                            {"loop_correction", opt.loop_correction}};
   j["dynamic_leak"] = dynamic_leak(frames);
@@ -757,8 +761,10 @@ int run(Options opt) {
       opt.depth_estimate == "mask_pixels" ? cge::DepthEstimate::mask_pixels : cge::DepthEstimate::box_samples;
   settings.mapping.reference_min_observations = opt.reference_min_observations;
   settings.patch_keyframes.interval_frames = opt.keyframe_interval;
+  settings.patch_keyframes.tracking_ratio = opt.keyframe_tracking_ratio;
   settings.frame.orb.spread_oversampling = opt.orb_spread;
   settings.local_mapping.bundle.solver.max_iterations = opt.local_ba_iterations;
+  settings.local_mapping.ba_rounds_per_frame = opt.local_ba_rounds_per_frame;
   {
     cge::slam::LocalMappingSettings& lm = settings.local_mapping;
     const std::string& m = opt.map_maintenance;
@@ -1206,9 +1212,17 @@ int main(int argc, char** argv) {
   app.add_option("--local-ba-iterations", opt.local_ba_iterations,
                  "Ceres iterations per round of the local BA (its time budget per keyframe; 2 rounds)")
       ->check(CLI::Range(1, 1000));
+  app.add_option("--local-ba-rounds-per-frame", opt.local_ba_rounds_per_frame,
+                 "local BA rounds solved per frame: the keyframe's frame solves the first, the next frames the "
+                 "rest (1), or all in the keyframe's frame (2)")
+      ->check(CLI::Range(1, 2));
   app.add_option("--orb-spread", opt.orb_spread,
                  "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")
       ->check(CLI::Range(1, 8));
+  app.add_option("--keyframe-tracking-ratio", opt.keyframe_tracking_ratio,
+                 "mode YMK: a frame tracking fewer map points than this share of its reference keyframe's "
+                 "becomes a keyframe at once (0: off)")
+      ->check(CLI::Range(0.0, 0.99));
   app.add_option("--keyframe-interval", opt.keyframe_interval,
                  "mode YMK: frames per interval of the patch keyframe selector (k; its best candidate is inserted "
                  "at the end of each interval)")

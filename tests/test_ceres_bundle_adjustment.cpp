@@ -339,3 +339,44 @@ TEST_CASE("RgbdReprojectionCost equals the autodiff residuals and Jacobians", "[
   double r[3];
   CHECK_FALSE(analytic.Evaluate(params, r, nullptr));
 }
+
+TEST_CASE("BundleAdjustmentRun: rounds solved one at a time give exactly what adjust gives", "[ceres]") {
+  std::mt19937 rng(41);
+  BAScene s = make_ba_scene(rng, 6, 150, true);
+  // Gross pixel errors, so that the first round's outliers sit out the second.
+  for (std::size_t k = 0; k < s.observations.size(); k += 17) s.observations[k].pixel_px += Eigen::Vector2d(40, -25);
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector3d> points;
+  perturb(rng, s, poses, points, {0});
+  const BundleAdjustmentSettings settings;  // two rounds, the first robust
+  const BundleAdjustmentResult whole = BundleAdjuster(settings).adjust(s.K, poses, points, s.observations, {0});
+
+  cge::BundleAdjustmentRun run(settings, s.K, poses, points, s.observations, {0});
+  CHECK_FALSE(run.done());
+  CHECK(run.rounds_left() == 2);
+  const BundleAdjustmentResult start = run.result();  // nothing solved: the input back
+  CHECK(cge_test::bit_identical(start.T_world_camera[3], poses[3]));
+  CHECK(start.points_world_m[7] == points[7]);
+  run.solve_next_round();
+  CHECK(run.rounds_solved() == 1);
+  CHECK(run.rounds_left() == 1);
+  const BundleAdjustmentResult first = run.result();
+  // The first round alone brings the poses most of the way (the oracle: the true poses).
+  for (std::size_t i = 1; i < poses.size(); ++i) {
+    CAPTURE(i);
+    CHECK(translation_error_m(first.T_world_camera[i], s.T_world_camera[i]) <
+          translation_error_m(poses[i], s.T_world_camera[i]));
+  }
+  run.solve_next_round();
+  CHECK(run.done());
+  CHECK(run.rounds_left() == 0);
+  run.solve_next_round();  // nothing left: no change
+  const BundleAdjustmentResult stepwise = run.result();
+  REQUIRE(stepwise.T_world_camera.size() == whole.T_world_camera.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) CHECK(cge_test::bit_identical(stepwise.T_world_camera[i], whole.T_world_camera[i]));
+  for (std::size_t j = 0; j < points.size(); ++j) CHECK(stepwise.points_world_m[j] == whole.points_world_m[j]);
+  CHECK(stepwise.outliers == whole.outliers);
+  CHECK(stepwise.outlier_count > 0);
+  CHECK(stepwise.iterations == whole.iterations);
+  CHECK(stepwise.final_cost == whole.final_cost);
+}

@@ -324,3 +324,49 @@ TEST_CASE("local_bundle_adjustment keeps a point whose depth observations all en
     CHECK((t.map.map_point(j).position_world - t.true_points[static_cast<std::size_t>(j)]).norm() < 1e-3);
   }
 }
+
+TEST_CASE("LocalBundleAdjustment round by round: each round lands in the map, the end equals the whole BA", "[slam]") {
+  std::mt19937 rng_a(9), rng_b(9);
+  TruthMap whole = make_map(4, 80, rng_a);
+  TruthMap stepwise = make_map(4, 80, rng_b);
+  const cge::slam::LocalMappingSettings settings;
+  cge::slam::local_bundle_adjustment(whole.map, 3, kIntrinsics, settings, 1.2);
+
+  const Eigen::Isometry3d start = stepwise.map.keyframe(3).T_world_camera;
+  cge::slam::LocalBundleAdjustment adjustment(stepwise.map, 3, kIntrinsics, settings, 1.2);
+  CHECK(adjustment.keyframe_id() == 3);
+  CHECK(adjustment.rounds_left() == 2);
+  CHECK(adjustment.report().points == 80);
+  CHECK_FALSE(adjustment.report().ran);
+  CHECK(cge_test::bit_identical(stepwise.map.keyframe(3).T_world_camera, start));  // nothing solved yet
+  adjustment.solve_next_round(stepwise.map);
+  CHECK(adjustment.rounds_left() == 1);
+  CHECK(adjustment.report().ran);
+  // The first round is in the map already, nearer the truth than the start.
+  CHECK(translation_error_m(stepwise.map.keyframe(3).T_world_camera, stepwise.true_poses[3]) <
+        0.1 * translation_error_m(start, stepwise.true_poses[3]));
+  adjustment.solve_next_round(stepwise.map);
+  CHECK(adjustment.done());
+  for (int k = 0; k < 4; ++k) {
+    CAPTURE(k);
+    CHECK(cge_test::bit_identical(stepwise.map.keyframe(k).T_world_camera, whole.map.keyframe(k).T_world_camera));
+  }
+  for (int j = 0; j < 80; ++j) CHECK(stepwise.map.map_point(j).position_world == whole.map.map_point(j).position_world);
+}
+
+TEST_CASE("LocalBundleAdjustment with nothing to optimise is done at once", "[slam]") {
+  cge::slam::Map map;
+  cge::slam::Keyframe kf;
+  kf.keypoints.emplace_back(10.f, 10.f, 31.f);
+  kf.points_camera_m.emplace_back(0, 0, 1);
+  kf.labels.push_back(cge::FeatureLabel::static_feature);
+  kf.descriptors = cv::Mat::zeros(1, 32, CV_8UC1);
+  map.add_keyframe(kf);
+  cge::slam::LocalBundleAdjustment adjustment(map, 0, kIntrinsics, cge::slam::LocalMappingSettings{}, 1.2);
+  CHECK(adjustment.done());
+  CHECK(adjustment.rounds_left() == 0);
+  adjustment.solve_next_round(map);
+  CHECK_FALSE(adjustment.report().ran);
+  CHECK_THROWS_AS(cge::slam::LocalBundleAdjustment(map, 1, kIntrinsics, cge::slam::LocalMappingSettings{}, 1.2),
+                  std::invalid_argument);
+}

@@ -29,13 +29,14 @@ BundleObservation keyframe_bundle_observation(const Keyframe& kf, int keypoint_i
   return b;
 }
 
-LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
-                                                    const PinholeIntrinsics<double>& intrinsics,
-                                                    const LocalMappingSettings& lm, double orb_scale_factor) {
+LocalBundleAdjustment::LocalBundleAdjustment(const Map& map, int keyframe_id,
+                                             const PinholeIntrinsics<double>& intrinsics,
+                                             const LocalMappingSettings& lm, double orb_scale_factor)
+    : keyframe_id_(keyframe_id) {
   if (keyframe_id < 0 || keyframe_id >= map.keyframe_count()) {
     throw std::invalid_argument("local_bundle_adjustment: unknown keyframe " + std::to_string(keyframe_id));
   }
-  LocalBundleAdjustmentReport report;
+  LocalBundleAdjustmentReport& report = report_;
   // The window: the new keyframe and its most covisible ones; keyframe 0 stays fixed (the gauge).
   std::vector<int> window{keyframe_id};
   for (const int id : map.covisible_keyframes(keyframe_id, lm.covisible_keyframes)) window.push_back(id);
@@ -50,7 +51,7 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
   }
   std::sort(point_ids.begin(), point_ids.end());
   point_ids.erase(std::unique(point_ids.begin(), point_ids.end()), point_ids.end());
-  if (point_ids.empty()) return report;
+  if (point_ids.empty()) return;
   // Fixed observers, as in ORB-SLAM2's local BA: the keyframes outside the window that observe its
   // points, here the fixed_keyframes of them with most such observations (ties: smaller id). They
   // hold the gauge; ranked by covisibility with the new keyframe alone, a window that already took
@@ -75,8 +76,8 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
   };
   // Poses: the window, then the fixed observers that see a point, each indexed once.
   std::map<int, int> pose_index;
-  std::vector<int> keyframe_of;
-  std::vector<int> fixed;
+  std::vector<int>& keyframe_of = keyframe_of_;
+  std::vector<int>& fixed = fixed_;
   const auto index_of = [&](int k) {
     const auto it = pose_index.find(k);
     if (it != pose_index.end()) return it->second;
@@ -92,9 +93,9 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
   // point along its ray, and it slides to kilometres (walking_rpy: points 300 m to 7 km out, which
   // then pulled tracked poses 17 cm off). Its observation that had depth may belong to a keyframe
   // left out of the problem.
-  std::vector<std::int64_t> optimised_ids;
+  std::vector<std::int64_t>& optimised_ids = optimised_ids_;
   std::vector<Eigen::Vector3d> points;
-  std::vector<BundleObservation> observations;
+  std::vector<BundleObservation>& observations = observations_;
   std::vector<BundleObservation> of_point;   // the point's observations taking part, pose index unset
   std::vector<int> keyframe_of_observation;  // their keyframes
   for (const std::int64_t id : point_ids) {
@@ -121,40 +122,74 @@ LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
       observations.push_back(of_point[k]);
     }
   }
-  if (points.empty() || fixed.empty()) return report;  // no gauge: no keyframe 0, no outside observers
+  if (points.empty() || fixed.empty()) return;  // no gauge: no keyframe 0, no outside observers
   std::vector<Eigen::Isometry3d> poses;
   for (const int k : keyframe_of) poses.push_back(map.keyframe(k).T_world_camera);
-  const BundleAdjustmentResult ba = BundleAdjuster{lm.bundle}.adjust(intrinsics, poses, points, observations, fixed);
-  for (std::size_t i = 0; i < keyframe_of.size(); ++i) {
-    if (std::find(fixed.begin(), fixed.end(), static_cast<int>(i)) == fixed.end()) {
-      map.set_keyframe_pose(keyframe_of[i], ba.T_world_camera[i]);
-    }
-  }
-  // The same holds at the optimum: a point whose depth observations all ended as outliers was fixed
-  // by pixels alone in the last round, so it keeps its position.
-  std::vector<char> anchored_at_optimum(points.size(), 0);
-  for (std::size_t k = 0; k < observations.size(); ++k) {
-    if (!ba.outliers[k] && !std::isnan(observations[k].depth_m))
-      anchored_at_optimum[static_cast<std::size_t>(observations[k].point)] = 1;
-  }
-  for (std::size_t j = 0; j < optimised_ids.size(); ++j) {
-    if (anchored_at_optimum[j]) {
-      map.set_map_point_position(optimised_ids[j], ba.points_world_m[j]);
-    } else {
-      ++report.points_kept;
-    }
-  }
-  report.ran = true;
+  points_start_ = points;
+  run_ = std::make_unique<BundleAdjustmentRun>(lm.bundle, intrinsics, poses, points, observations, fixed);
   report.window_keyframes = static_cast<int>(window.size());
   report.fixed_keyframes = static_cast<int>(fixed.size());
   for (const int index : fixed) report.fixed_keyframe_ids.push_back(keyframe_of[static_cast<std::size_t>(index)]);
   std::sort(report.fixed_keyframe_ids.begin(), report.fixed_keyframe_ids.end());
   report.points = static_cast<int>(points.size());
   report.observations = static_cast<int>(observations.size());
-  report.outliers = ba.outlier_count;
-  report.iterations = ba.iterations;
-  report.converged = ba.converged;
-  return report;
+}
+
+LocalBundleAdjustment::~LocalBundleAdjustment() = default;
+LocalBundleAdjustment::LocalBundleAdjustment(LocalBundleAdjustment&&) noexcept = default;
+LocalBundleAdjustment& LocalBundleAdjustment::operator=(LocalBundleAdjustment&&) noexcept = default;
+
+bool LocalBundleAdjustment::done() const { return run_ == nullptr || run_->done(); }
+
+int LocalBundleAdjustment::rounds_left() const { return done() ? 0 : run_->rounds_left(); }
+
+void LocalBundleAdjustment::solve_next_round(Map& map) {
+  if (done()) return;
+  run_->solve_next_round();
+  write_back(map);
+}
+
+void LocalBundleAdjustment::solve_remaining_rounds(Map& map) {
+  if (done()) return;
+  while (!run_->done()) run_->solve_next_round();
+  write_back(map);
+}
+
+void LocalBundleAdjustment::write_back(Map& map) {
+  const BundleAdjustmentResult ba = run_->result();
+  for (std::size_t i = 0; i < keyframe_of_.size(); ++i) {
+    if (std::find(fixed_.begin(), fixed_.end(), static_cast<int>(i)) == fixed_.end()) {
+      map.set_keyframe_pose(keyframe_of_[i], ba.T_world_camera[i]);
+    }
+  }
+  // The same holds at the optimum: a point whose depth observations all ended as outliers was fixed
+  // by pixels alone in the last round, so it keeps its position from before the adjustment.
+  std::vector<char> anchored_at_optimum(points_start_.size(), 0);
+  for (std::size_t k = 0; k < observations_.size(); ++k) {
+    if (!ba.outliers[k] && !std::isnan(observations_[k].depth_m))
+      anchored_at_optimum[static_cast<std::size_t>(observations_[k].point)] = 1;
+  }
+  report_.points_kept = 0;
+  for (std::size_t j = 0; j < optimised_ids_.size(); ++j) {
+    if (anchored_at_optimum[j]) {
+      map.set_map_point_position(optimised_ids_[j], ba.points_world_m[j]);
+    } else {
+      map.set_map_point_position(optimised_ids_[j], points_start_[j]);
+      ++report_.points_kept;
+    }
+  }
+  report_.ran = true;
+  report_.outliers = ba.outlier_count;
+  report_.iterations = ba.iterations;
+  report_.converged = ba.converged;
+}
+
+LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,
+                                                    const PinholeIntrinsics<double>& intrinsics,
+                                                    const LocalMappingSettings& lm, double orb_scale_factor) {
+  LocalBundleAdjustment adjustment(map, keyframe_id, intrinsics, lm, orb_scale_factor);
+  adjustment.solve_remaining_rounds(map);
+  return adjustment.report();
 }
 
 }  // namespace slam

@@ -156,8 +156,14 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
   record.T_world_camera = track.T_world_camera;
   records_.push_back(record);
   const std::size_t index = records_.size() - 1;
+  advance_local_mapping();  // the previous keyframe's BA goes on while frames are tracked
 
   t = Clock::now();
+  const auto triggered_ms = [&] {
+    return time_of(records_[index], Stage::local_mapping) + time_of(records_[index], Stage::loop_closing) +
+           time_of(records_[index], Stage::optimisation);
+  };
+  const double triggered_before_ms = triggered_ms();
   if (track.has_pose()) decide_keyframe(frame, track, index);
   // Keyframe time excludes the local mapping, loop closing and optimisation it triggered (timed on
   // their own).
@@ -167,8 +173,7 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
   if (r.has_pose() && r.reference_keyframe < 0 && tracker_.reference_keyframe() >= 0) {
     keep_relative_to(index, tracker_.reference_keyframe());
   }
-  time_of(r, Stage::keyframe) = elapsed_ms(t) - time_of(r, Stage::local_mapping) - time_of(r, Stage::loop_closing) -
-                                time_of(r, Stage::optimisation);
+  time_of(r, Stage::keyframe) = elapsed_ms(t) - (triggered_ms() - triggered_before_ms);
   time_of(r, Stage::total) = elapsed_ms(start) + segmentation_ms;
   return r;
 }
@@ -244,6 +249,7 @@ void System::apply_decision(const KeyframeDecision<double>& decision, Frame* cur
 
 int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::size_t record, const char* rule,
                             std::size_t current_record) {
+  flush_local_mapping();  // the previous keyframe's BA ends before the map changes
   Keyframe kf;
   kf.frame_index = frame.index;
   kf.timestamp_s = frame.timestamp_s;
@@ -320,20 +326,61 @@ void System::local_mapping(int keyframe_id) {
     recent_points_.insert(recent_points_.end(), made.created.begin(), made.created.end());
   }
   if (lm.fuse_map_points) fuse_map_points(map_, keyframe_id, intrinsics_, image_size_, scale, maintenance);
-  if (lm.bundle_adjustment) local_bundle_adjustment(map_, keyframe_id, intrinsics_, lm, scale);
-  if (lm.cull_keyframes) {
-    cull_redundant_keyframes(map_, keyframe_id, maintenance);
-    // The tracker's local map is centred on a live keyframe.
-    int reference = tracker_.reference_keyframe();
-    while (reference >= 0 && map_.keyframe(reference).culled) reference = map_.keyframe(reference).parent;
-    tracker_.set_reference_keyframe(reference);
+  if (lm.bundle_adjustment) {
+    local_ba_ = std::make_unique<LocalBundleAdjustment>(map_, keyframe_id, intrinsics_, lm, scale);
   }
+}
+
+void System::advance_local_mapping() {
+  if (local_ba_ == nullptr) return;
+  const auto start = Clock::now();
+  const int rounds = settings_.local_mapping.ba_rounds_per_frame;
+  if (rounds >= local_ba_->rounds_left()) {
+    local_ba_->solve_remaining_rounds(map_);  // one write into the map
+  } else {
+    for (int i = 0; i < rounds; ++i) local_ba_->solve_next_round(map_);
+  }
+  time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start);
+  if (!local_ba_->done()) return;
+  const int keyframe_id = local_ba_->keyframe_id();
+  local_ba_.reset();
+  complete_keyframe(keyframe_id);
+}
+
+void System::flush_local_mapping() {
+  if (local_ba_ == nullptr) return;
+  const auto start = Clock::now();
+  local_ba_->solve_remaining_rounds(map_);
+  time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start);
+  const int keyframe_id = local_ba_->keyframe_id();
+  local_ba_.reset();
+  complete_keyframe(keyframe_id);
 }
 
 void System::after_keyframe_inserted(int keyframe_id) {
   const auto start_local = Clock::now();
   local_mapping(keyframe_id);
   time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_local);
+  if (local_ba_ != nullptr) {
+    advance_local_mapping();
+  } else {
+    complete_keyframe(keyframe_id);
+  }
+}
+
+void System::complete_keyframe(int keyframe_id) {
+  const LocalMappingSettings& lm = settings_.local_mapping;
+  if (lm.cull_keyframes) {
+    const auto start_cull = Clock::now();
+    MapMaintenanceSettings maintenance = lm.maintenance;
+    maintenance.close_depth_m = settings_.frame.close_depth_m;
+    cull_redundant_keyframes(map_, keyframe_id, maintenance);
+    // The tracker's local map is centred on a live keyframe.
+    int reference = tracker_.reference_keyframe();
+    while (reference >= 0 && map_.keyframe(reference).culled) reference = map_.keyframe(reference).parent;
+    tracker_.set_reference_keyframe(reference);
+    time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_cull);
+  }
   // Loop closing (ALGORITHMS.md section 7): the closer reads map_ (a KeyframeDatabaseView) and
   // its decision becomes a LoopRecord. The correction of an accepted loop (pose-graph
   // optimisation, then bundle adjustment, through map_.set_keyframe_pose / set_map_point_position)
@@ -468,6 +515,7 @@ void System::finish() {
   const KeyframeDecision<double> decision = keyframe_policy_.flush();
   apply_decision(decision, nullptr, nullptr, 0);
   pending_.clear();
+  if (!records_.empty()) flush_local_mapping();
 }
 
 Eigen::Isometry3d System::pose_of(const FrameRecord& record) const {

@@ -125,6 +125,50 @@ struct BundleAdjustmentResult {
   bool converged = false;   ///< the last round reached a convergence tolerance (or could not lower the cost)
 };
 
+/// One bundle adjustment solved a round at a time, so that a caller can spread the rounds over
+/// several calls (the SLAM pipeline runs one round per camera frame: a serial stand-in for
+/// ORB-SLAM2's local-mapping thread, which optimises while tracking goes on). Running every round
+/// and then taking result() is exactly BundleAdjuster::adjust.
+class BundleAdjustmentRun {
+ public:
+  /// Validates as BundleAdjuster::adjust does (throws std::invalid_argument naming the problem)
+  /// and takes the starting state; no round is solved yet.
+  BundleAdjustmentRun(const BundleAdjustmentSettings& settings, const PinholeIntrinsics<double>& intrinsics,
+                      const std::vector<Eigen::Isometry3d>& T_world_camera,
+                      const std::vector<Eigen::Vector3d>& points_world_m,
+                      const std::vector<BundleObservation>& observations, const std::vector<int>& fixed_keyframes);
+
+  /// True when every round has been solved (or there was nothing left to optimise).
+  bool done() const { return finished_; }
+  /// Rounds solved so far.
+  int rounds_solved() const { return result_.rounds; }
+  /// Rounds still to solve (0 when done()).
+  int rounds_left() const { return finished_ ? 0 : settings_.rounds - result_.rounds; }
+  /// Solves the next round; after each but the last, the observations over the chi2 threshold sit
+  /// out the next round. Nothing to do when done().
+  void solve_next_round();
+  /// Poses, points and outlier flags at the current state (after the rounds solved so far).
+  BundleAdjustmentResult result() const;
+
+ private:
+  bool is_outlier(const BundleObservation& o, const Eigen::Isometry3d& T_camera_world,
+                  const Eigen::Vector3d& point_world, double* pixel_sq) const;
+  void classify(BundleAdjustmentResult& result) const;
+
+  BundleAdjustmentSettings settings_;
+  PinholeIntrinsics<double> intrinsics_;
+  std::vector<Eigen::Isometry3d> T_world_camera_start_;
+  std::vector<Eigen::Vector3d> points_start_;
+  std::vector<BundleObservation> observations_;
+  std::vector<SE3Block> poses_;  ///< T_camera_world, optimised in place
+  std::vector<Eigen::Vector3d> points_;
+  std::vector<bool> fixed_;
+  std::vector<bool> active_;  ///< observations in the next round
+  std::vector<bool> used_pose_, used_point_;
+  BundleAdjustmentResult result_;  ///< costs, rounds, iterations, convergence so far
+  bool finished_ = false;
+};
+
 class BundleAdjuster {
  public:
   BundleAdjustmentSettings settings;
@@ -140,136 +184,13 @@ class BundleAdjuster {
                                 const std::vector<Eigen::Vector3d>& points_world_m,
                                 const std::vector<BundleObservation>& observations,
                                 const std::vector<int>& fixed_keyframes = {0}) const {
-    settings.validate();
-    validate_input(intrinsics, T_world_camera, points_world_m, observations, fixed_keyframes);
-    const std::size_t n_poses = T_world_camera.size(), n_points = points_world_m.size();
-
-    std::vector<SE3Block> poses;
-    poses.reserve(n_poses);
-    for (const Eigen::Isometry3d& T : T_world_camera) poses.push_back(SE3Block::from_isometry(T.inverse()));
-    std::vector<Eigen::Vector3d> points = points_world_m;
-    std::vector<bool> fixed(n_poses, false);
-    for (int f : fixed_keyframes) fixed[f] = true;
-
-    std::vector<Eigen::Isometry3d> T_camera_world_start;
-    T_camera_world_start.reserve(n_poses);
-    for (const SE3Block& b : poses) T_camera_world_start.push_back(b.to_isometry());
-
-    BundleAdjustmentResult result;
-    // Observations in the next round: those in front of their camera at the start.
-    std::vector<bool> active(observations.size());
-    for (std::size_t k = 0; k < observations.size(); ++k)
-      active[k] =
-          (T_camera_world_start[observations[k].keyframe] * points[observations[k].point]).z() > settings.min_depth_m;
-    std::vector<bool> used_pose(n_poses, false), used_point(n_points, false);
-    for (int round = 0; round < settings.rounds; ++round) {
-      // One loss shared by every residual; it outlives the problem, which does not own it.
-      ceres::HuberLoss huber(settings.huber_delta > 0 ? settings.huber_delta : 1.0);  // any width when unused
-      ceres::Problem problem(problem_options());
-      // Elimination order given, not searched for: points first (Schur complement), then poses.
-      auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-      std::vector<bool> in_problem(n_poses, false), point_in_problem(n_points, false);
-      const bool robust = round < settings.robust_rounds && settings.huber_delta > 0;
-      for (std::size_t k = 0; k < observations.size(); ++k) {
-        if (!active[k]) continue;
-        const BundleObservation& o = observations[k];
-        SE3Block& pose = poses[o.keyframe];
-        if (!in_problem[o.keyframe]) {
-          pose.add_to(problem, fixed[o.keyframe]);
-          ordering->AddElementToGroup(pose.q_xyzw.data(), 1);
-          ordering->AddElementToGroup(pose.t.data(), 1);
-          in_problem[o.keyframe] = true;
-          used_pose[o.keyframe] = true;
-        }
-        if (!point_in_problem[o.point]) {
-          ordering->AddElementToGroup(points[o.point].data(), 0);
-          point_in_problem[o.point] = true;
-        }
-        used_point[o.point] = true;
-        const bool has_depth = !std::isnan(o.depth_m);
-        problem.AddResidualBlock(new RgbdReprojectionCost(intrinsics, o.pixel_px, 1.0 / o.sigma_px,
-                                                          has_depth ? o.depth_m : 0.0,
-                                                          has_depth ? 1.0 / o.sigma_depth_m : 0.0, settings.min_depth_m),
-                                 robust ? &huber : nullptr, pose.q_xyzw.data(), pose.t.data(), points[o.point].data());
-      }
-      ceres::Solver::Options options = settings.solver.options(/*sparse=*/settings.sparse_schur, /*schur=*/true);
-      options.linear_solver_ordering = ordering;
-      if (problem.NumResidualBlocks() == 0) {
-        if (round == 0) result.converged = true;  // nothing to optimise
-        break;
-      }
-      ceres::Solver::Summary summary;
-      ceres::Solve(options, &problem, &summary);
-      if (round == 0) result.initial_cost = summary.initial_cost;
-      result.final_cost = summary.final_cost;
-      result.iterations += static_cast<int>(summary.iterations.size()) - 1;
-      result.rounds = round + 1;
-      result.converged =
-          summary.termination_type == ceres::CONVERGENCE ||
-          (summary.termination_type == ceres::NO_CONVERGENCE && summary.final_cost >= summary.initial_cost);
-      if (round + 1 < settings.rounds) {
-        // Outliers at this round's optimum sit out the next round (ORB-SLAM2's local BA).
-        std::vector<Eigen::Isometry3d> T_camera_world;
-        for (const SE3Block& b : poses) T_camera_world.push_back(b.to_isometry());
-        for (std::size_t k = 0; k < observations.size(); ++k)
-          active[k] = !is_outlier(intrinsics, observations[k], T_camera_world[observations[k].keyframe],
-                                  points[observations[k].point], nullptr);
-      }
-    }
-
-    result.T_world_camera.reserve(n_poses);
-    for (std::size_t i = 0; i < n_poses; ++i)
-      result.T_world_camera.push_back(fixed[i] || !used_pose[i] ? T_world_camera[i] : poses[i].to_isometry().inverse());
-    result.points_world_m = std::move(points);
-    for (std::size_t j = 0; j < n_points; ++j)
-      if (!used_point[j]) result.points_world_m[j] = points_world_m[j];
-    classify(intrinsics, observations, result);
-    return result;
+    BundleAdjustmentRun run(settings, intrinsics, T_world_camera, points_world_m, observations, fixed_keyframes);
+    while (!run.done()) run.solve_next_round();
+    return run.result();
   }
 
- private:
-  /// chi2 test of one observation at T_camera_world; `pixel_sq` (if given) receives the squared
-  /// pixel error.
-  bool is_outlier(const PinholeIntrinsics<double>& K, const BundleObservation& o,
-                  const Eigen::Isometry3d& T_camera_world, const Eigen::Vector3d& point_world, double* pixel_sq) const {
-    const Eigen::Vector3d p = T_camera_world * point_world;
-    if (!(p.z() > settings.min_depth_m)) return true;
-    const double e_sq = (K.project(p) - o.pixel_px).squaredNorm();
-    if (pixel_sq != nullptr) *pixel_sq = e_sq;
-    double chi2 = e_sq / (o.sigma_px * o.sigma_px);
-    double threshold = settings.chi2_threshold_2dof;
-    if (!std::isnan(o.depth_m)) {
-      const double e = (p.z() - o.depth_m) / o.sigma_depth_m;
-      chi2 += e * e;
-      threshold = settings.chi2_threshold_3dof;
-    }
-    return !(chi2 <= threshold);
-  }
-
-  void classify(const PinholeIntrinsics<double>& K, const std::vector<BundleObservation>& observations,
-                BundleAdjustmentResult& result) const {
-    result.outliers.assign(observations.size(), false);
-    result.outlier_count = 0;
-    double sum_sq_px = 0;
-    int inliers = 0;
-    std::vector<Eigen::Isometry3d> T_camera_world;
-    T_camera_world.reserve(result.T_world_camera.size());
-    for (const Eigen::Isometry3d& T : result.T_world_camera) T_camera_world.push_back(T.inverse());
-    for (std::size_t k = 0; k < observations.size(); ++k) {
-      const BundleObservation& o = observations[k];
-      double pixel_sq = 0;
-      const bool outlier = is_outlier(K, o, T_camera_world[o.keyframe], result.points_world_m[o.point], &pixel_sq);
-      result.outliers[k] = outlier;
-      if (outlier) {
-        ++result.outlier_count;
-      } else {
-        sum_sq_px += pixel_sq;
-        ++inliers;
-      }
-    }
-    result.final_rms_px = inliers > 0 ? std::sqrt(sum_sq_px / inliers) : 0.0;
-  }
-
+  /// Throws std::invalid_argument on invalid intrinsics, poses, points, observations or fixed
+  /// keyframes, naming the index.
   static void validate_input(const PinholeIntrinsics<double>& K, const std::vector<Eigen::Isometry3d>& poses,
                              const std::vector<Eigen::Vector3d>& points,
                              const std::vector<BundleObservation>& observations, const std::vector<int>& fixed) {
@@ -307,5 +228,153 @@ class BundleAdjuster {
     }
   }
 };
+
+
+inline BundleAdjustmentRun::BundleAdjustmentRun(const BundleAdjustmentSettings& settings,
+                                                const PinholeIntrinsics<double>& intrinsics,
+                                                const std::vector<Eigen::Isometry3d>& T_world_camera,
+                                                const std::vector<Eigen::Vector3d>& points_world_m,
+                                                const std::vector<BundleObservation>& observations,
+                                                const std::vector<int>& fixed_keyframes)
+    : settings_(settings),
+      intrinsics_(intrinsics),
+      T_world_camera_start_(T_world_camera),
+      points_start_(points_world_m),
+      observations_(observations),
+      points_(points_world_m) {
+  settings_.validate();
+  BundleAdjuster::validate_input(intrinsics, T_world_camera, points_world_m, observations, fixed_keyframes);
+  const std::size_t n_poses = T_world_camera.size();
+  poses_.reserve(n_poses);
+  for (const Eigen::Isometry3d& T : T_world_camera) poses_.push_back(SE3Block::from_isometry(T.inverse()));
+  fixed_.assign(n_poses, false);
+  for (const int f : fixed_keyframes) fixed_[static_cast<std::size_t>(f)] = true;
+  // Observations in the first round: those in front of their camera at the start.
+  active_.resize(observations_.size());
+  for (std::size_t k = 0; k < observations_.size(); ++k) {
+    const BundleObservation& o = observations_[k];
+    active_[k] = (poses_[o.keyframe].to_isometry() * points_[o.point]).z() > settings_.min_depth_m;
+  }
+  used_pose_.assign(n_poses, false);
+  used_point_.assign(points_.size(), false);
+}
+
+inline void BundleAdjustmentRun::solve_next_round() {
+  if (finished_) return;
+  const int round = result_.rounds;
+  // One loss shared by every residual; it outlives the problem, which does not own it.
+  ceres::HuberLoss huber(settings_.huber_delta > 0 ? settings_.huber_delta : 1.0);  // any width when unused
+  ceres::Problem problem(problem_options());
+  // Elimination order given, not searched for: points first (Schur complement), then poses.
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  std::vector<bool> pose_in_problem(poses_.size(), false), point_in_problem(points_.size(), false);
+  const bool robust = round < settings_.robust_rounds && settings_.huber_delta > 0;
+  for (std::size_t k = 0; k < observations_.size(); ++k) {
+    if (!active_[k]) continue;
+    const BundleObservation& o = observations_[k];
+    SE3Block& pose = poses_[o.keyframe];
+    if (!pose_in_problem[o.keyframe]) {
+      pose.add_to(problem, fixed_[o.keyframe]);
+      ordering->AddElementToGroup(pose.q_xyzw.data(), 1);
+      ordering->AddElementToGroup(pose.t.data(), 1);
+      pose_in_problem[o.keyframe] = true;
+      used_pose_[o.keyframe] = true;
+    }
+    if (!point_in_problem[o.point]) {
+      ordering->AddElementToGroup(points_[o.point].data(), 0);
+      point_in_problem[o.point] = true;
+    }
+    used_point_[o.point] = true;
+    const bool has_depth = !std::isnan(o.depth_m);
+    problem.AddResidualBlock(new RgbdReprojectionCost(intrinsics_, o.pixel_px, 1.0 / o.sigma_px,
+                                                      has_depth ? o.depth_m : 0.0,
+                                                      has_depth ? 1.0 / o.sigma_depth_m : 0.0, settings_.min_depth_m),
+                             robust ? &huber : nullptr, pose.q_xyzw.data(), pose.t.data(), points_[o.point].data());
+  }
+  if (problem.NumResidualBlocks() == 0) {
+    if (round == 0) result_.converged = true;  // nothing to optimise
+    finished_ = true;
+    return;
+  }
+  ceres::Solver::Options options = settings_.solver.options(/*sparse=*/settings_.sparse_schur, /*schur=*/true);
+  options.linear_solver_ordering = ordering;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (round == 0) result_.initial_cost = summary.initial_cost;
+  result_.final_cost = summary.final_cost;
+  result_.iterations += static_cast<int>(summary.iterations.size()) - 1;
+  result_.rounds = round + 1;
+  result_.converged =
+      summary.termination_type == ceres::CONVERGENCE ||
+      (summary.termination_type == ceres::NO_CONVERGENCE && summary.final_cost >= summary.initial_cost);
+  if (result_.rounds == settings_.rounds) {
+    finished_ = true;
+    return;
+  }
+  // Outliers at this round's optimum sit out the next round (ORB-SLAM2's local BA).
+  std::vector<Eigen::Isometry3d> T_camera_world;
+  T_camera_world.reserve(poses_.size());
+  for (const SE3Block& b : poses_) T_camera_world.push_back(b.to_isometry());
+  for (std::size_t k = 0; k < observations_.size(); ++k) {
+    const BundleObservation& o = observations_[k];
+    active_[k] = !is_outlier(o, T_camera_world[o.keyframe], points_[o.point], nullptr);
+  }
+}
+
+inline BundleAdjustmentResult BundleAdjustmentRun::result() const {
+  BundleAdjustmentResult result = result_;
+  result.T_world_camera.reserve(poses_.size());
+  for (std::size_t i = 0; i < poses_.size(); ++i) {
+    result.T_world_camera.push_back(fixed_[i] || !used_pose_[i] ? T_world_camera_start_[i]
+                                                                : poses_[i].to_isometry().inverse());
+  }
+  result.points_world_m = points_;
+  for (std::size_t j = 0; j < points_.size(); ++j) {
+    if (!used_point_[j]) result.points_world_m[j] = points_start_[j];
+  }
+  classify(result);
+  return result;
+}
+
+/// chi2 test of one observation at T_camera_world; `pixel_sq` (if given) receives the squared pixel
+/// error.
+inline bool BundleAdjustmentRun::is_outlier(const BundleObservation& o, const Eigen::Isometry3d& T_camera_world,
+                                            const Eigen::Vector3d& point_world, double* pixel_sq) const {
+  const Eigen::Vector3d p = T_camera_world * point_world;
+  if (!(p.z() > settings_.min_depth_m)) return true;
+  const double e_sq = (intrinsics_.project(p) - o.pixel_px).squaredNorm();
+  if (pixel_sq != nullptr) *pixel_sq = e_sq;
+  double chi2 = e_sq / (o.sigma_px * o.sigma_px);
+  double threshold = settings_.chi2_threshold_2dof;
+  if (!std::isnan(o.depth_m)) {
+    const double e = (p.z() - o.depth_m) / o.sigma_depth_m;
+    chi2 += e * e;
+    threshold = settings_.chi2_threshold_3dof;
+  }
+  return !(chi2 <= threshold);
+}
+
+inline void BundleAdjustmentRun::classify(BundleAdjustmentResult& result) const {
+  result.outliers.assign(observations_.size(), false);
+  result.outlier_count = 0;
+  double sum_sq_px = 0;
+  int inliers = 0;
+  std::vector<Eigen::Isometry3d> T_camera_world;
+  T_camera_world.reserve(result.T_world_camera.size());
+  for (const Eigen::Isometry3d& T : result.T_world_camera) T_camera_world.push_back(T.inverse());
+  for (std::size_t k = 0; k < observations_.size(); ++k) {
+    const BundleObservation& o = observations_[k];
+    double pixel_sq = 0;
+    const bool outlier = is_outlier(o, T_camera_world[o.keyframe], result.points_world_m[o.point], &pixel_sq);
+    result.outliers[k] = outlier;
+    if (outlier) {
+      ++result.outlier_count;
+    } else {
+      sum_sq_px += pixel_sq;
+      ++inliers;
+    }
+  }
+  result.final_rms_px = inliers > 0 ? std::sqrt(sum_sq_px / inliers) : 0.0;
+}
 
 }  // namespace cge

@@ -13,6 +13,7 @@
 //
 // Deterministic: keyframes and points in id order, one-threaded Ceres.
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "cge/ceres/bundle_adjustment.hpp"
@@ -48,7 +49,48 @@ struct LocalBundleAdjustmentReport {
 BundleObservation keyframe_bundle_observation(const Keyframe& kf, int keypoint_index, int pose, int point,
                                               double orb_scale_factor, double depth_sigma_per_m);
 
-/// Optimises the window around `keyframe_id` in place (keyframe poses through Map::set_keyframe_pose,
+/// The local bundle adjustment of one keyframe's window, solved a round at a time so that the
+/// pipeline can spread its rounds over the frames that follow (LocalMappingSettings::
+/// ba_rounds_per_frame), as ORB-SLAM2's local-mapping thread optimises while tracking goes on.
+/// Between rounds the map must not change structurally (no keyframe inserted or culled, no point
+/// erased or fused); tracking may read it. Every round writes the window's poses and points into the
+/// map, so the frames tracked meanwhile see the partly optimised window.
+class LocalBundleAdjustment {
+ public:
+  /// Collects the window, its fixed observers, points and observations from the map (nothing is
+  /// solved yet). Throws std::invalid_argument for an unknown keyframe.
+  LocalBundleAdjustment(const Map& map, int keyframe_id, const PinholeIntrinsics<double>& intrinsics,
+                        const LocalMappingSettings& settings, double orb_scale_factor);
+  ~LocalBundleAdjustment();
+  LocalBundleAdjustment(LocalBundleAdjustment&&) noexcept;
+  LocalBundleAdjustment& operator=(LocalBundleAdjustment&&) noexcept;
+
+  int keyframe_id() const { return keyframe_id_; }
+  /// True when every round is solved, or there was nothing to optimise.
+  bool done() const;
+  /// Rounds not solved yet (0 when done()).
+  int rounds_left() const;
+  /// Solves the next round and writes the optimised poses and points into `map`.
+  void solve_next_round(Map& map);
+  /// Solves every round left, then writes the result into `map` once.
+  void solve_remaining_rounds(Map& map);
+  /// What was done so far (complete once done()).
+  const LocalBundleAdjustmentReport& report() const { return report_; }
+
+ private:
+  void write_back(Map& map);
+
+  int keyframe_id_ = -1;
+  std::vector<int> keyframe_of_;             ///< pose index -> keyframe id
+  std::vector<int> fixed_;                   ///< fixed pose indices
+  std::vector<std::int64_t> optimised_ids_;  ///< point index -> map point id
+  std::vector<Eigen::Vector3d> points_start_;
+  std::vector<BundleObservation> observations_;
+  std::unique_ptr<BundleAdjustmentRun> run_;  ///< null: nothing to optimise
+  LocalBundleAdjustmentReport report_;
+};
+
+/// Optimises the window around `keyframe_id` in place, every round at once (keyframe poses through Map::set_keyframe_pose,
 /// points through Map::set_map_point_position). `orb_scale_factor` gives each keypoint its pixel sigma
 /// (scale_factor^octave). Throws std::invalid_argument for an unknown keyframe.
 LocalBundleAdjustmentReport local_bundle_adjustment(Map& map, int keyframe_id,

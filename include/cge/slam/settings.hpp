@@ -186,6 +186,13 @@ struct LocalMappingSettings {
   int fixed_keyframes = 10;
   /// Depth standard deviation: sigma_z = depth_sigma_per_m * z^2 (Kinect-like growth), 1/m, > 0.
   double depth_sigma_per_m = 0.003;
+  /// Local-BA rounds solved per camera frame, >= 1: the keyframe's frame solves the first, each
+  /// following frame the next, and the keyframe culling and loop closing of that keyframe wait for
+  /// the last (a serial stand-in for ORB-SLAM2's local-mapping thread, which optimises while
+  /// tracking goes on; a new keyframe, a loop or the end of the run first finishes what is left).
+  /// One round per frame keeps a keyframe's frame from stalling the stream; >= bundle.rounds solves
+  /// the whole BA in the keyframe's frame.
+  int ba_rounds_per_frame = 1;
   /// Rounds, loss and iterations: a Huber round and a plain round on the chi2 inliers, as ORB-SLAM2.
   BundleAdjustmentSettings bundle = [] {
     BundleAdjustmentSettings b;
@@ -277,6 +284,7 @@ struct SystemSettings {
     if (!(frame.close_depth_m > 0)) fail("frame.close_depth_m must be > 0");
     if (local_mapping.covisible_keyframes < 0) fail("local_mapping.covisible_keyframes must not be negative");
     if (local_mapping.fixed_keyframes < 0) fail("local_mapping.fixed_keyframes must not be negative");
+    if (local_mapping.ba_rounds_per_frame < 1) fail("local_mapping.ba_rounds_per_frame must be at least 1");
     if (!(local_mapping.depth_sigma_per_m > 0)) fail("local_mapping.depth_sigma_per_m must be > 0");
     local_mapping.bundle.validate();
     local_mapping.maintenance.validate();

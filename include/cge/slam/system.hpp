@@ -105,6 +105,7 @@ struct LoopRecord {
 };
 
 class LoopCloser;
+class LocalBundleAdjustment;
 
 class System {
  public:
@@ -159,8 +160,16 @@ class System {
   /// The loop closer appends its decision to loops_ and corrects poses through map_; timed as the
   /// loop_closing and optimisation stages of the current frame.
   void after_keyframe_inserted(int keyframe_id);
-  /// Map maintenance and local BA around a new keyframe (LocalMappingSettings), timed as local_mapping.
+  /// Map maintenance around a new keyframe and the start of its local BA (LocalMappingSettings),
+  /// timed as local_mapping.
   void local_mapping(int keyframe_id);
+  /// Solves the pending local BA's rounds of this frame (ba_rounds_per_frame); when it is done, the
+  /// keyframe's local mapping ends (complete_keyframe).
+  void advance_local_mapping();
+  /// Solves what is left of the pending local BA (before the map changes, and at the end).
+  void flush_local_mapping();
+  /// After a keyframe's local BA: redundant keyframes culled, then loop closing and correction.
+  void complete_keyframe(int keyframe_id);
   static constexpr std::size_t kNoRecord = static_cast<std::size_t>(-1);
   /// Keeps record's pose relative to keyframe_id's pose as it is now (see pose_of).
   void keep_relative_to(std::size_t record, int keyframe_id);
@@ -179,6 +188,7 @@ class System {
   std::vector<LoopRecord> loops_;
   std::deque<Pending> pending_;
   std::unique_ptr<LoopCloser> loop_closer_;
+  std::unique_ptr<LocalBundleAdjustment> local_ba_;  ///< the local BA under way, null: none
   struct LoopEdge {
     int match = -1, query = -1;
     Eigen::Isometry3d T_match_query = Eigen::Isometry3d::Identity();
