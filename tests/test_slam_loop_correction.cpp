@@ -24,7 +24,7 @@
 namespace {
 
 // Two laps in 120 frames: 6 degrees and 5.8 cm a frame, as fast as the 181-frame render of the
-// three-lap scene that used to lose half its frames.
+// three-lap scene: the fast motion at which tracking is hardest to keep.
 constexpr int kFrames = 120;
 constexpr int kLaps = 2;
 constexpr int kVocabularyFrames = 20;  // the first frames train the vocabulary (the pipeline's default)

@@ -334,10 +334,10 @@ void System::after_keyframe_inserted(int keyframe_id) {
   const auto start_local = Clock::now();
   local_mapping(keyframe_id);
   time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_local);
-  // Loop closing (ALGORITHMS.md section 7): the closer reads map_ (a KeyframeDatabaseView) and
+  // Loop closing (docs/METHOD.md section 7): the closer reads map_ (a KeyframeDatabaseView) and
   // its decision becomes a LoopRecord. The correction of an accepted loop (pose-graph
   // optimisation, then bundle adjustment, through map_.set_keyframe_pose / set_map_point_position)
-  // belongs here too, timed as the optimisation stage.
+  // follows, timed as the optimisation stage.
   if (loop_closer_ == nullptr) return;
   const auto start = Clock::now();
   const Keyframe& kf = map_.keyframe(keyframe_id);
