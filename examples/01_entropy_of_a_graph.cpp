@@ -2,7 +2,7 @@
 //
 // A graph is built from an edge list with Graph::from_edges. DegreeDegreeEntropy gives the
 // degree-degree association entropy H (bits) and the information index I = lambda (log2|V| - H);
-// ShannonEdgeEntropy gives H_W, the entropy of the edge-length distribution (ALGORITHMS.md 4-5).
+// ShannonEdgeEntropy gives H_W, the entropy of the edge-length distribution (docs/METHOD.md sections 4-5).
 
 #include <cmath>
 #include <cstdio>

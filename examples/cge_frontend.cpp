@@ -1,6 +1,6 @@
 // cge_frontend: the dynamic-feature front end on one RGB-D frame. ORB features, instance
 // segmentation (a YOLOv8-seg model, or a precomputed instance-label PNG, or none), the
-// DepthMADFilter (ALGORITHMS.md section 1), a JSON report on standard output and, on request, a
+// DepthMADFilter (docs/METHOD.md section 1), a JSON report on standard output and, on request, a
 // picture of the result. See docs/CLI.md.
 //
 // Exit codes: 0 success; 1 a failure after the input was accepted (writing the picture or standard

@@ -1,4 +1,4 @@
-// cge_loop_study: the study of the entropy measures (issue 7 item 3) on a synthetic loop sequence.
+// cge_loop_study: the study of the entropy measures on a synthetic loop sequence.
 //
 //   cge_loop_study --dataset DIR --out DIR [--force] [--step 3] [--min-gap-frames 30] [--alpha 0.5]
 //                  [--collapse-tolerance-bits 1] [--mode YMK] [--seed 0] [--ties all|mean|min]
@@ -21,7 +21,7 @@
 // average_precision_normalised (cge/metrics/binary_classifier.hpp; nan when the pairs lack a class).
 //
 // Collapse: with alpha = 0.5 and raw exponents of 1e3..1e5 the functional puts its mass on one or
-// two nodes, H ~ 0 and the information index I = log2|V| - H ~ log2|V| (ALGORITHMS.md section 4).
+// two nodes, H ~ 0 and the information index I = log2|V| - H ~ log2|V| (docs/METHOD.md section 4).
 // A frame is `collapsed` when |I - log2|V|| = H <= T bits (lambda = 1, the default): H <= 1 bit
 // means the distribution's perplexity 2^H is at most 2, i.e. effectively one or two nodes.
 // Same inputs, same bytes. Exit codes: 0 success, 1 failure while writing, 2 bad usage or input.

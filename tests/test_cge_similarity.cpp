@@ -1,4 +1,4 @@
-// Tests of CGESimilarity (ALGORITHMS.md section 6): S_ge, the semantic pre-judgment, the weighted
+// Tests of CGESimilarity (docs/METHOD.md section 6): S_ge, the semantic pre-judgment, the weighted
 // combination, and score() against graphs built by hand with GraphBuilder.
 #include <catch2/catch.hpp>
 

@@ -1,4 +1,4 @@
-// DepthMADFilter (ALGORITHMS.md section 1): hand-built depth and mask fixtures for every rule,
+// DepthMADFilter (docs/METHOD.md section 1): hand-built depth and mask fixtures for every rule,
 // hand-worked statistics under a scripted engine, and an independent brute-force oracle that
 // re-derives the samples from the same seed for randomised fixtures.
 #include <catch2/catch.hpp>

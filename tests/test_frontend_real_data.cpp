@@ -1,5 +1,5 @@
 // The dynamic-feature front end on real TUM frames: ORB features, YOLOv8-seg person masks and the
-// DepthMADFilter. The claim under test (ALGORITHMS.md section 1): the depth test catches features
+// DepthMADFilter. The claim under test (docs/METHOD.md section 1): the depth test catches features
 // on the people's edges that the masks missed. "On a person's edge" is decided here without the
 // filter's labels, and the two are compared. Also: a frame with almost no depth on the people,
 // where the test is skipped and says why, and the mask_pixels depth estimate on both frames.

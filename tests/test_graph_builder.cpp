@@ -1,4 +1,4 @@
-// Tests of GraphBuilder (ALGORITHMS.md section 3): a naive reference implementation written from
+// Tests of GraphBuilder (docs/METHOD.md section 3): a naive reference implementation written from
 // the spec (node selection and the round-based edge construction, brute force over an adjacency
 // matrix) compared with both neighbour-search policies; property tests for every property the
 // spec lists; node selection; errors.
@@ -67,7 +67,7 @@ Instance make_instance(double x, double y, int class_id, bool dynamic) {
 }
 
 // =============================================================================================
-// Naive reference implementation of ALGORITHMS.md section 3
+// Naive reference implementation of docs/METHOD.md section 3
 // =============================================================================================
 
 struct RefEdge {
@@ -573,7 +573,7 @@ TEST_CASE("GraphBuilder::build_edges matches the reference on nodes given direct
 }
 
 // =============================================================================================
-// Property tests (rapidcheck): every property listed in ALGORITHMS.md section 3
+// Property tests (rapidcheck): every property listed in docs/METHOD.md section 3
 // =============================================================================================
 
 namespace {

@@ -1,4 +1,4 @@
-// Tests of keyframe selection (ALGORITHMS.md section 2): the patch statistics against brute-force
+// Tests of keyframe selection (docs/METHOD.md section 2): the patch statistics against brute-force
 // and hand-worked values, every rule of PatchKeyframeSelector firing and not firing, the interval
 // end, an offline reference implementation of the state machine on random sequences, determinism,
 // the ORB-SLAM2 baseline's rules, and the run-time switch between the two.

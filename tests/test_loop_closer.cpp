@@ -203,8 +203,8 @@ std::set<int> check_decisions(const LoopScene& s, const std::vector<LoopDecision
     // The geometric check's relative pose agrees with the ground truth.
     const Eigen::Isometry3d truth = s.keyframes[static_cast<std::size_t>(d.match_keyframe)].T_world_camera.inverse() *
                                     s.keyframes[static_cast<std::size_t>(d.query_keyframe)].T_world_camera;
-    // EPnP inside RANSAC without refinement: a few cm and degrees (since issue 5 more partners are
-    // verified, some farther from the query: 6.5 cm / 1.7 degrees measured on loop_structure_change).
+    // EPnP inside RANSAC without refinement: a few cm and degrees (every consistent group's best
+    // members are verified, some far from the query: 6.5 cm / 1.7 degrees measured on loop_structure_change).
     CHECK((d.T_match_query.translation() - truth.translation()).norm() < 0.1);
     CHECK(rotation_error_deg(d.T_match_query, truth) < 3.0);
     // Inlier pairs are static features, the match's with depth.

@@ -1,4 +1,4 @@
-// Issue 5, loop closing: the choice among geometrically verified candidates (choose_verification),
+// Loop closing: the choice among geometrically verified candidates (choose_verification),
 // the extended loops.csv (tentative matches, checks run, connected keyframes), and the evaluation's
 // breakdown of missed loop queries and open query recall. Oracles: hand-worked logs, and random logs
 // against a brute-force count on frame numbers.

@@ -1,4 +1,4 @@
-// Tests of ShannonEdgeEntropy (ALGORITHMS.md section 5): H_W = -sum p_l log2 p_l, p_l = w_l / sum w.
+// Tests of ShannonEdgeEntropy (docs/METHOD.md section 5): H_W = -sum p_l log2 p_l, p_l = w_l / sum w.
 #include <catch2/catch.hpp>
 
 #include <cmath>

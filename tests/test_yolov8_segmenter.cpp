@@ -55,7 +55,7 @@ float& proto_at(cv::Mat& protos, int k, int r, int c) {
   return protos.ptr<float>()[(k * protos.size[2] + r) * protos.size[3] + c];
 }
 
-// The mask of ALGORITHMS/docs written out naively, pixel by pixel in double precision: the
+// The mask of docs/SEGMENTATION.md (step 6) written out naively, pixel by pixel in double precision: the
 // prototype map sigmoid(coefficients . prototypes), zero on cells whose centre is outside the box
 // and outside the grid, sampled bilinearly at each original pixel centre inside the box.
 // `uncertain` counts pixels whose value is within 1e-4 of the threshold (rounding may flip them)

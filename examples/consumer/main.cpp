@@ -1,4 +1,4 @@
-// Uses the installed cge package: the information index of the path P5 (ALGORITHMS.md section 4).
+// Uses the installed cge package: the information index of the path P5 (docs/METHOD.md section 4).
 // Exits 0 when it matches the worked value, 1 otherwise.
 #include <cmath>
 #include <cstdio>

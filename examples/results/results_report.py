@@ -324,7 +324,7 @@ def keyframe_section(ctx: Context) -> list[str]:
     lines = ["## Keyframes against ORB-SLAM2 (paper Figure 10)", "",
              "Kept keyframes at the end of the run: ORB-SLAM2's KeyFrameTrajectory.txt (after its keyframe "
              "culling) and our summary.json `keyframes` (after ours). Modes none, Y and YM insert keyframes by "
-             "our implementation of ORB-SLAM2's RGB-D rule, YMK by the patch keyframe selector (ALGORITHMS.md "
+             "our implementation of ORB-SLAM2's RGB-D rule, YMK by the patch keyframe selector (docs/METHOD.md "
              f"section 2). Target: YMK keeps at least {TARGET_KEYFRAME_REDUCTION:.0%} fewer keyframes than "
              f"ORB-SLAM2 on each walking preset (the paper: {paper.KEYFRAME_REDUCTION_MEAN:.1%} fewer on "
              "average); the other rows are shown, not judged. \"YMK fewer than YM\" compares the two policies "
@@ -583,7 +583,7 @@ def study_section(ctx: Context) -> list[str]:
              "exponents (the paper) and normalised exponents; then S_sum alone for every pair of frames, "
              "labelled by the ground-truth loops. Collapse: the information index I = log2|V| - H lies "
              "within the tool's tolerance (1 bit) of log2|V|, i.e. H <= 1 bit: the degree-degree "
-             "distribution puts its mass on one or two nodes (ALGORITHMS.md section 4), and the index "
+             "distribution puts its mass on one or two nodes (docs/METHOD.md section 4), and the index "
              "then mostly compares node counts. The paper reports no such study (no ROC or AP of S_sum); "
              "ORB-SLAM2 has no graph entropy.", ""]
     rows = []

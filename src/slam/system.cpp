@@ -381,10 +381,10 @@ void System::complete_keyframe(int keyframe_id) {
     tracker_.set_reference_keyframe(reference);
     time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_cull);
   }
-  // Loop closing (ALGORITHMS.md section 7): the closer reads map_ (a KeyframeDatabaseView) and
+  // Loop closing (docs/METHOD.md section 7): the closer reads map_ (a KeyframeDatabaseView) and
   // its decision becomes a LoopRecord. The correction of an accepted loop (pose-graph
   // optimisation, then bundle adjustment, through map_.set_keyframe_pose / set_map_point_position)
-  // belongs here too, timed as the optimisation stage.
+  // follows, timed as the optimisation stage.
   if (loop_closer_ == nullptr) return;
   const auto start = Clock::now();
   const Keyframe& kf = map_.keyframe(keyframe_id);

@@ -1,5 +1,5 @@
 #pragma once
-// BundleAdjuster: global bundle adjustment over keyframe poses and 3-D points (ALGORITHMS.md
+// BundleAdjuster: global bundle adjustment over keyframe poses and 3-D points (docs/METHOD.md
 // section 7.5, after the pose graph), with Ceres. Each observation is a pixel (whitened by its
 // sigma_px, 2 dof) and, for RGB-D, optionally the measured depth (whitened by its sigma_depth_m; 3
 // dof with the pixel), which also fixes the scale that pixels alone leave free. As ORB-SLAM2's local

@@ -1,5 +1,5 @@
 #pragma once
-// PoseGraphOptimiser: pose-graph optimisation over keyframe poses (ALGORITHMS.md section 7.5:
+// PoseGraphOptimiser: pose-graph optimisation over keyframe poses (docs/METHOD.md section 7.5:
 // sequential, covisibility and loop edges), with Ceres. Nodes are T_world_camera (metres), edges
 // measured relative poses T_a_b = T_world_a^-1 * T_world_b with a 6x6 information matrix (rotation
 // first, then translation; see pose_graph_cost.hpp). The caller names the fixed nodes (at least one:

@@ -1,6 +1,6 @@
 #pragma once
 // PoseRefiner: motion-only refinement of a camera pose from 3-D world points observed at pixels
-// (ALGORITHMS.md section 8: the PnP pose refined by minimising the reprojection error with a robust
+// (docs/METHOD.md section 8: the PnP pose refined by minimising the reprojection error with a robust
 // loss), in the manner of ORB-SLAM2's PoseOptimization:
 //   - each observation's residual is whitened by its sigma_px (e.g. 1.2^octave for ORB), so the
 //     squared residual is a chi-square statistic with 2 dof;

@@ -1,5 +1,5 @@
 #pragma once
-// CGESimilarity: combinatorial graph entropy similarity of two frames (ALGORITHMS.md section 6).
+// CGESimilarity: combinatorial graph entropy similarity of two frames (docs/METHOD.md section 6).
 //
 //   S_ge(I1, I2) = 1 / (1 + |I1 - I2|^a)
 //   same static semantic layout (S_cos_x >= S_th_x, or neither frame has static instances):

@@ -17,7 +17,7 @@ enum class CoefficientKind {
   constant,  ///< c_k = 1
 };
 
-/// The three schemes of ALGORITHMS.md, chosen at run time (what the command-line tool needs).
+/// The three schemes of docs/METHOD.md section 4, chosen at run time (what the command-line tool needs).
 struct StandardCoefficients {
   CoefficientKind kind = CoefficientKind::exp;
 

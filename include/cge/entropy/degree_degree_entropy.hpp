@@ -1,6 +1,6 @@
 #pragma once
 // DegreeDegreeEntropy: the degree-degree association entropy of an unweighted graph and its
-// information index (ALGORITHMS.md section 4).
+// information index (docs/METHOD.md section 4).
 //
 //   E(v) = sum_{k=1..rho} c_k Delta(v, k)        exponent (coefficient policy, tie mode)
 //   f(v) = alpha^E(v), p(v) = f(v) / sum f        evaluated as a log-domain softmax, never alpha^E
@@ -9,7 +9,7 @@
 //
 // compute() costs O(|V| |E|) time, O(|V| rho) memory. compute_index() (and information_index())
 // gives H and I without the per-node exponents; for alpha < 1 with raw exponents and non-negative
-// coefficients it completes E(v) only for the nodes that carry weight (weight_bounded_entropy.hpp:
+// coefficients it completes E(v) only for the nodes that carry weight (kernels/weight_bounded_entropy.hpp:
 // the nodes it leaves out weigh less than e^-100 of the heaviest, which moves H by under
 // |V| 2e-41 bits; twins are searched once): 3-4x faster at 1000 nodes, little on dense 300-node
 // graphs (docs/BENCHMARK.md).
@@ -28,9 +28,9 @@
 #include "cge/core/concepts.hpp"
 #include "cge/entropy/coefficients.hpp"
 #include "cge/entropy/exponent_scaling.hpp"
+#include "cge/entropy/kernels/weight_bounded_entropy.hpp"
 #include "cge/entropy/shortest_path_degree_sums.hpp"
 #include "cge/entropy/softmax_entropy.hpp"
-#include "cge/entropy/weight_bounded_entropy.hpp"
 #include "cge/graph/adjacency_bitsets.hpp"
 #include "cge/graph/graph.hpp"
 #include "cge/graph/hop_diameter.hpp"

@@ -18,7 +18,7 @@ enum class TieMode {
 
 namespace detail {
 
-/// The degree-degree entropy is undefined on an empty graph (ALGORITHMS.md section 4): one message
+/// The degree-degree entropy is undefined on an empty graph (docs/METHOD.md section 4): one message
 /// for every entry point.
 inline void require_nodes(std::int32_t num_nodes) {
   if (num_nodes == 0) throw std::invalid_argument("degree-degree entropy: the graph has no nodes");

@@ -1,5 +1,5 @@
 #pragma once
-// The semantic pre-judgment of ALGORITHMS.md section 6: do two frames show the same static
+// The semantic pre-judgment of docs/METHOD.md section 6: do two frames show the same static
 // semantic layout? X = counts per class of the static instances; S_cos_x = X_a.X_b / (|X_a||X_b|).
 
 #include <cmath>

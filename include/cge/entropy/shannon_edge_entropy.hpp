@@ -1,6 +1,6 @@
 #pragma once
 // ShannonEdgeEntropy: Shannon entropy of the edge-length distribution of a weighted graph
-// (ALGORITHMS.md section 5): p_l = w_l / sum w, H_W = -sum p_l log2 p_l, in bits.
+// (docs/METHOD.md section 5): p_l = w_l / sum w, H_W = -sum p_l log2 p_l, in bits.
 // Zero-length edges are skipped (they carry no probability); no edges or all zero: H_W = 0.
 
 #include <cmath>

@@ -1,5 +1,5 @@
 #pragma once
-// Delta(v, k) of ALGORITHMS.md section 4: over the shortest paths of length k that start at v, the
+// Delta(v, k) of docs/METHOD.md section 4: over the shortest paths of length k that start at v, the
 // sums of absolute degree differences along the path, computed exactly in O(|V| |E|) by a BFS
 // dynamic programme from every source, without listing paths.
 //
@@ -13,9 +13,10 @@
 // N and S are kept in double: path counts grow exponentially on tie-rich graphs.
 // The sweep runs 64 sources at once, one bit per source: the same O(|V| |E|) arithmetic, but the
 // BFS bookkeeping costs one word operation per 64 sources. Two kernels implement it with the same
-// operations in the same order, so their tables agree bit for bit:
-//   - portable (bit_parallel_degree_sums.hpp): plain C++;
-//   - avx512 (compact_lane_degree_sums.hpp): compact per-level values, 8 sources per instruction,
+// operations in the same order, so their tables agree bit for bit (and with the plain code of
+// reference_degree_degree_entropy.hpp):
+//   - portable (kernels/block_bfs.hpp): plain C++;
+//   - avx512 (kernels/block_bfs_avx512.hpp): compact per-level values, 8 sources per instruction,
 //     chosen at run time on x86-64 CPUs that support it.
 
 #include <algorithm>
@@ -23,9 +24,9 @@
 #include <stdexcept>
 #include <vector>
 
-#include "cge/entropy/bit_parallel_degree_sums.hpp"
-#include "cge/entropy/compact_lane_degree_sums.hpp"
 #include "cge/entropy/degree_sum_table.hpp"
+#include "cge/entropy/kernels/block_bfs.hpp"
+#include "cge/entropy/kernels/block_bfs_avx512.hpp"
 #include "cge/graph/graph.hpp"
 
 namespace cge {
@@ -75,13 +76,13 @@ template <TieMode Mode, typename Scalar>
 void fill_table(const Graph<Scalar>& g, DegreeSumTable& table, bool use_avx512) {
 #if CGE_DEGREE_SUMS_HAVE_AVX512
   if (use_avx512) {
-    fill_table<CompactLaneDegreeSums<Mode, Scalar>>(g, table);
+    fill_table<BlockBfsDegreeSumsAvx512<Mode, Scalar>>(g, table);
     return;
   }
 #else
   (void)use_avx512;
 #endif
-  fill_table<BitParallelDegreeSums<Mode, Scalar>>(g, table);
+  fill_table<BlockBfsDegreeSums<Mode, Scalar>>(g, table);
 }
 
 }  // namespace detail

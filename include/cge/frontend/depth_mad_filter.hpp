@@ -1,6 +1,6 @@
 #pragma once
 // DepthMADFilter: dynamic-feature elimination by instance masks plus the mean absolute deviation
-// (MAD) of depth inside each dynamic instance's box (ALGORITHMS.md section 1; the resolutions of
+// (MAD) of depth inside each dynamic instance's box (docs/METHOD.md section 1; the resolutions of
 // the paper's ambiguities are in docs/METHOD.md).
 //
 // Pixels: a keypoint at (u, v) lies on pixel (round(u), round(v)), halves away from zero (OpenCV's
@@ -210,7 +210,7 @@ bool disc_inside_mask(const Mask& mask, int col, int row, int radius, int width,
 
 }  // namespace detail
 
-/// The dynamic-feature filter of ALGORITHMS.md section 1. RandomEngine: any engine accepted by
+/// The dynamic-feature filter of docs/METHOD.md section 1. RandomEngine: any engine accepted by
 /// cge::uniform_unit_double (outputs spanning 0 .. 2^b - 1), default std::mt19937_64.
 template <typename RandomEngine = std::mt19937_64>
 class DepthMADFilter {

@@ -5,7 +5,7 @@
 
 namespace cge {
 
-/// Why a keypoint is kept or dropped (ALGORITHMS.md section 1). The reason is kept, not just a
+/// Why a keypoint is kept or dropped (docs/METHOD.md section 1). The reason is kept, not just a
 /// flag: it feeds the ablation (mask only vs mask + MAD) and the statistics of dynamic points
 /// that leak through.
 enum class FeatureLabel : std::uint8_t {

@@ -1,5 +1,5 @@
 #pragma once
-// PatchKeyframeSelector: the keyframe selection of ALGORITHMS.md section 2 as an online state
+// PatchKeyframeSelector: the keyframe selection of docs/METHOD.md section 2 as an online state
 // machine. Feed it one FrameSummary per frame with step(); at the end of a sequence call flush().
 //
 // States and transitions (docs/METHOD.md has the reasoning):

@@ -1,5 +1,5 @@
 #pragma once
-// The per-frame quantities of patch keyframe selection (ALGORITHMS.md section 2): features per
+// The per-frame quantities of patch keyframe selection (docs/METHOD.md section 2): features per
 // patch, the distribution vector Z, its cosine similarity, the dense-patch mean and the semantic
 // centroid. Pure functions; PatchKeyframeSelector composes them.
 

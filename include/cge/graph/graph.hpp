@@ -22,7 +22,7 @@ namespace cge {
 template <typename S, typename NS>
 class GraphBuilder;
 
-/// What a node of a frame graph stands for (ALGORITHMS.md section 3).
+/// What a node of a frame graph stands for (docs/METHOD.md section 3).
 enum class NodeKind : std::uint8_t {
   feature = 0,         ///< a stable feature point outside dense patches
   representation = 1,  ///< the centre of a dense patch, standing for its features

@@ -1,5 +1,5 @@
 #pragma once
-// GraphBuilder: the frame graph of ALGORITHMS.md section 3, built for one frame with respect to a
+// GraphBuilder: the frame graph of docs/METHOD.md section 3, built for one frame with respect to a
 // partner frame (stability depends on both frames' dynamic masks).
 //
 // Determinism: the output depends only on the input values, never on their order (nodes are put
@@ -413,7 +413,7 @@ class GraphBuilder {
     }
   }
 
-  /// The round-based radius search (ALGORITHMS.md section 3).
+  /// The round-based radius search (docs/METHOD.md section 3).
   ///
   /// "Already joined" needs no adjacency lists: an edge is only ever made by one of its endpoints
   /// during its turn as a centre, and a centre leaves its turn joined to every node within the last

@@ -5,7 +5,7 @@
 // other neighbours) and false twins when their open neighbourhoods are equal (N(u) = N(v): not
 // adjacent). Either way, swapping u and v is an automorphism of the graph, so every quantity
 // defined by the structure alone (hop distances, shortest-path counts, Delta(v, k) of
-// ALGORITHMS.md section 4 in every tie mode) is the same for both. A node with a true twin has no
+// docs/METHOD.md section 4 in every tie mode) is the same for both. A node with a true twin has no
 // false twin, so the two relations together partition the nodes.
 //
 // Frame graphs have many: the round-based radius search joins a centre to every node within R,

@@ -4,7 +4,7 @@
 //
 // A segmentation network misses the rim of a person (an eroded mask), the feet (the bottom of the
 // mask lost) and now and then a whole frame's instance. The dynamic-feature filter handles the
-// first two for keypoints with the depth MAD of each instance (ALGORITHMS.md section 1); the map
+// first two for keypoints with the depth MAD of each instance (docs/METHOD.md section 1); the map
 // applies the same idea to its pixels:
 //   1. every mask pixel and every pixel within `edge_dilation_px` of one (the eroded rim);
 //   2. per instance (an 8-connected component of the mask with at least `min_instance_px` pixels

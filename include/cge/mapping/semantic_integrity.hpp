@@ -1,5 +1,5 @@
 #pragma once
-// Semantic integrity and fluctuation of a semantic map (ALGORITHMS.md section 8, after Zhang et al.).
+// Semantic integrity and fluctuation of a semantic map (docs/METHOD.md section 8, after Zhang et al.).
 //
 // An entity is a class label with an axis-aligned bounding box of voxels (its "bounding cube").
 // For each entity: T_N = occupied voxels inside the box (any colour), T_O = those of the entity's

@@ -1,6 +1,6 @@
 #pragma once
 // SemanticMapBuilder: the dense semantic point cloud and the semantic octree of a run, built from
-// keyframes (ALGORITHMS.md section 8; docs/MAPS.md).
+// keyframes (docs/METHOD.md section 8; docs/MAPS.md).
 //
 // Per keyframe: every `pixel_stride`-th pixel with valid depth in (0, max_range_m], outside the
 // dynamic region (the dynamic mask grown by dynamic_region()), is back-projected with the keyframe's pose

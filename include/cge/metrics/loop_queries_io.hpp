@@ -10,7 +10,7 @@
 //   - accepted: 0 or 1; reason: one word of lower-case letters and '_' (accepted, no_candidates,
 //     low_score, continuity, too_few_matches, pose_not_robust); accepted is 1 exactly when the
 //     reason is "accepted", and an accepted row has a match.
-// Since issue 5 the header may go on with three more columns (the extended format; a file is read
+// The header may go on with three more columns (the extended format; a file is read
 // in the format its header names, every row with that header's field count):
 //   ...,reason,tentative_matches,verified_keyframes,connected_keyframes
 //   - tentative_matches, verified_keyframes: non-negative whole numbers (descriptor matches before

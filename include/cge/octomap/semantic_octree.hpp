@@ -1,6 +1,6 @@
 #pragma once
 // SemanticOctree: an OctoMap ColorOcTree with log-odds occupancy from camera scans and one class
-// per occupied voxel (ALGORITHMS.md section 8). OctoMap + core only.
+// per occupied voxel (docs/METHOD.md section 8). OctoMap + core only.
 //
 // Each scan is a set of world points seen from one camera origin, integrated as OctoMap's
 // insertPointCloud(discretize) does, with OctoMap's ray caster (computeRayKeys) and its updateNode

@@ -1,5 +1,5 @@
 #pragma once
-// BowModel: the bag-of-words policy of the LoopCloser (ALGORITHMS.md section 7: "the bag-of-words
+// BowModel: the bag-of-words policy of the LoopCloser (docs/METHOD.md section 7: "the bag-of-words
 // model is a policy, so a host SLAM system can feed its own"). VocabularyBowModel is ours (a
 // cge::bow::Vocabulary plus an inverted-index cge::bow::BowDatabase); a host wraps DBoW2 or DBoW3
 // by implementing the same three functions.

@@ -1,5 +1,5 @@
 #pragma once
-// LoopCloser: loop detection and verification over keyframes (ALGORITHMS.md section 7, steps 1-4;
+// LoopCloser: loop detection and verification over keyframes (docs/METHOD.md section 7, steps 1-4;
 // step 5, the correction, belongs to the optimisers). process() is called once per new keyframe, in
 // id order; it keeps a BoW entry and cached graph entropies of every keyframe it has seen.
 //
@@ -59,7 +59,7 @@ LoopScoring loop_scoring_from_string(const std::string& name);
 /// Which dynamic masks decide a keypoint's stability in the frame graphs.
 enum class GraphStability {
   own_mask,    ///< the keyframe's own mask only: one graph per keyframe, computed once and cached
-  both_masks,  ///< own and partner's mask (ALGORITHMS.md section 3, exact): two graphs per pair
+  both_masks,  ///< own and partner's mask (docs/METHOD.md section 3, exact): two graphs per pair
 };
 
 struct LoopCloserSettings {

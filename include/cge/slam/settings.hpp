@@ -19,7 +19,7 @@
 namespace cge {
 namespace slam {
 
-/// Dynamic handling of the ablation (ALGORITHMS.md section 8, issue 5).
+/// Dynamic handling of the ablation (docs/METHOD.md sections 1 and 8).
 enum class DynamicMode : std::uint8_t {
   none,  ///< no dynamic handling, ORB-SLAM2-style keyframes (the baseline)
   Y,     ///< mask test only (labels dynamic_by_mask), ORB-SLAM2-style keyframes
@@ -104,12 +104,14 @@ struct TrackerSettings {
   int local_recent_keyframes = 5;      ///< local map: the last keyframes, count
   int local_covisible_keyframes = 10;  ///< local map: covisible keyframes of the reference keyframe, count
   double search_radius_px = 15;        ///< matching: window around a projected map point, pixels
-  /// When fewer than min_matches are found, matching is repeated once with a radius this many
-  /// times larger (a sudden change of motion), dimensionless.
+  /// The wide window, as a multiple of search_radius_px, dimensionless: when tracking the local map
+  /// at search_radius_px fails for any reason (fewer than min_matches matches, RANSAC or refinement
+  /// short of min_inliers, a pose beyond max_jump_m), it is tried once more at this radius (a sudden
+  /// change of motion); tracking against the last frame always matches within it.
   double wide_search_factor = 3;
   int max_hamming = 64;              ///< matching: largest descriptor distance accepted, bits of 256
   double ratio = 0.9;                ///< matching: best distance < ratio * second best (within the window)
-  int min_matches = 20;              ///< fewer matches than this: try the wide search, then relocalise
+  int min_matches = 20;              ///< fewer matches than this: the attempt fails (see wide_search_factor)
   int pnp_iterations = 100;          ///< RANSAC iterations of cv::solvePnPRansac
   double pnp_reprojection_px = 3.0;  ///< RANSAC inlier threshold, pixels
   double pnp_confidence = 0.99;      ///< RANSAC confidence, in (0, 1)
@@ -205,7 +207,7 @@ struct LocalMappingSettings {
   }();
 };
 
-/// Correction of an accepted loop (ALGORITHMS.md section 7.5): a pose graph over all keyframes
+/// Correction of an accepted loop (docs/METHOD.md section 7.5): a pose graph over all keyframes
 /// (sequential, covisibility and every accepted loop edge), map points moved with their first
 /// keyframe, then global bundle adjustment.
 struct LoopCorrectionSettings {
@@ -243,7 +245,7 @@ struct SystemSettings {
     return k;
   }();
   std::uint64_t seed = 0;             ///< the MAD filter's samples: frame i uses a seed derived from (seed, i)
-  bool keep_keyframe_images = false;  ///< keep bgr/depth in keyframes (for the dense maps of issue 6)
+  bool keep_keyframe_images = false;  ///< keep bgr/depth in keyframes (for the dense maps, docs/MAPS.md)
 
   void validate() const {
     const auto fail = [](const std::string& what) { throw std::invalid_argument("SystemSettings: " + what); };

@@ -118,8 +118,10 @@ class System {
   System& operator=(System&&) noexcept;
 
   /// Enables loop closing (section 7): after each keyframe insertion the closer processes the new
-  /// keyframe and its decision becomes a LoopRecord. Accepted loops are recorded, not yet corrected
-  /// (pose-graph optimisation is not wired in). Set it before the first frame.
+  /// keyframe and its decision becomes a LoopRecord. With settings.loop_correction enabled an
+  /// accepted loop is corrected at once (correct_loop: pose graph, then global BA), unless the last
+  /// correction is at most loop_correction.min_keyframes_between keyframes old; its loop edge then
+  /// joins the next correction. Set it before the first frame.
   void set_loop_closer(std::unique_ptr<LoopCloser> loop_closer);
 
   /// One frame, segmented by the owned segmenter (not in mode none). Throws std::invalid_argument

@@ -1,5 +1,5 @@
 #pragma once
-// Tracker: the camera pose of each frame against the map (ALGORITHMS.md section 8). Per frame:
+// Tracker: the camera pose of each frame against the map (docs/METHOD.md section 8). Per frame:
 // constant-velocity prediction; projection of the local map's points (those seen by the last
 // keyframes and by the reference keyframe's covisible ones) into the frame and matching to its
 // static keypoints by descriptor in a window; PnP with RANSAC on the matches; refinement by

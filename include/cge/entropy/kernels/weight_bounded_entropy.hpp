@@ -1,5 +1,5 @@
 #pragma once
-// The entropy H of p(v) = alpha^E(v) / sum alpha^E for alpha < 1 (ALGORITHMS.md section 4),
+// The entropy H of p(v) = alpha^E(v) / sum alpha^E for alpha < 1 (docs/METHOD.md section 4),
 // computing E(v) = sum_k c_k Delta(v, k) in full only for the nodes that carry weight.
 //
 // Why it is safe. With c_k >= 0 every term is >= 0, so the partial sums of E(v) over
@@ -34,10 +34,10 @@
 // stopped at the level where its partial sum passes the cut; the running minimum of the completed
 // exponents tightens the cut, and once a source's first term alone passes it, so do all later
 // ones. On frame-like graphs with raw exponents (E in the thousands) most searches stop after a
-// few levels. Tried and dropped: running the survivors in the 64-source block kernels with lanes
-// dropped at the cut (stop 16: the blocks complete more sources before the cut tightens), and a
-// best-first order with saved, resumable searches (stop 17: it reaches the smallest exponent
-// first and visits up to a third fewer arcs, but saving and resuming cost more than that saves).
+// few levels. Slower, measured: running the survivors in the 64-source block kernels with lanes
+// dropped at the cut (the blocks complete more sources before the cut tightens), and a best-first
+// order with saved, resumable searches (it reaches the smallest exponent first and visits up to a
+// third fewer arcs, but saving and resuming cost more than that saves).
 //
 // Kernel. Each search runs on adjacency bitsets where they pay (AdjacencyBitsets::rows_pay:
 // GraphBuilder's graphs), else on the neighbour lists; both give the same bits.
@@ -48,9 +48,9 @@
 #include <limits>
 #include <vector>
 
-#include "cge/entropy/bitset_single_source_degree_sums.hpp"
 #include "cge/entropy/degree_sum_table.hpp"
-#include "cge/entropy/single_source_degree_sums.hpp"
+#include "cge/entropy/kernels/single_source_bfs.hpp"
+#include "cge/entropy/kernels/single_source_bitset_bfs.hpp"
 #include "cge/entropy/softmax_entropy.hpp"
 #include "cge/graph/graph.hpp"
 #include "cge/graph/twin_classes.hpp"
@@ -76,8 +76,8 @@ inline bool exceeds_cut(double assembled_bound, double cut) {
   return assembled_bound * (1.0 - kAssembledBoundSafety) > cut;
 }
 
-/// The search below with a single-source kernel for g (SingleSourceDegreeSums or
-/// BitsetSingleSourceDegreeSums: the same bits, different speeds).
+/// The search below with a single-source kernel for g (SingleSourceBfsDegreeSums or
+/// SingleSourceBitsetBfsDegreeSums: the same bits, different speeds).
 template <typename Sums, typename Scalar>
 WeightBoundedEntropy weight_bounded_entropy_with(const Graph<Scalar>& g, Sums& sums,
                                                  const std::vector<double>& coefficients, double log_alpha,
@@ -172,10 +172,10 @@ WeightBoundedEntropy weight_bounded_entropy(const Graph<Scalar>& g, const Adjace
                                             const std::vector<double>& coefficients, double log_alpha,
                                             double negligible_log_weight) {
   if (rows != nullptr) {
-    BitsetSingleSourceDegreeSums<Mode, Scalar> sums(g, *rows);
+    SingleSourceBitsetBfsDegreeSums<Mode, Scalar> sums(g, *rows);
     return weight_bounded_entropy_with(g, sums, coefficients, log_alpha, negligible_log_weight);
   }
-  SingleSourceDegreeSums<Mode, Scalar> sums(g);
+  SingleSourceBfsDegreeSums<Mode, Scalar> sums(g);
   return weight_bounded_entropy_with(g, sums, coefficients, log_alpha, negligible_log_weight);
 }
 

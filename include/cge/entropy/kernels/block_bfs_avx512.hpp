@@ -1,7 +1,8 @@
 #pragma once
-// The AVX-512 kernel of shortest_path_degree_sums (ALGORITHMS.md section 4), chosen at run time.
+// Block BFS with AVX-512: the kernel of shortest_path_degree_sums on CPUs that have it
+// (docs/METHOD.md section 4), chosen at run time.
 //
-// The same dynamic programme as BitParallelDegreeSums, for the same blocks of 64 sources, with
+// The same dynamic programme as BlockBfsDegreeSums, for the same blocks of 64 sources, with
 // exactly the same floating-point operations in the same order, so the tables agree bit for bit:
 //   N[u] = sum_p N[p],  S[u] = sum_p (S[p] + N[p] |d(p) - d(u)|),  M[u] = min_p (M[p] + |d(p) - d(u)|)
 // with the predecessors p in ascending node order, and Delta(s, k) summed over the nodes at
@@ -38,8 +39,8 @@
 #include <vector>
 
 #include "cge/core/bits.hpp"
-#include "cge/entropy/bit_parallel_degree_sums.hpp"
 #include "cge/entropy/degree_sum_table.hpp"
+#include "cge/entropy/kernels/mean_rescale.hpp"
 #include "cge/graph/graph.hpp"
 
 // The instruction sets the kernel is compiled for (and checked at run time).
@@ -61,11 +62,11 @@ inline bool avx512_degree_sums_supported() {
 }
 
 /// Delta rows of up to 64 sources at once with compact per-level values (see the file comment).
-/// Same interface as BitParallelDegreeSums; run() only when avx512_degree_sums_supported().
+/// Same interface as BlockBfsDegreeSums; run() only when avx512_degree_sums_supported().
 template <TieMode Mode, typename Scalar>
-class CompactLaneDegreeSums {
+class BlockBfsDegreeSumsAvx512 {
  public:
-  explicit CompactLaneDegreeSums(const Graph<Scalar>& g)
+  explicit BlockBfsDegreeSumsAvx512(const Graph<Scalar>& g)
       : n_(g.num_nodes()),
         offsets_(g.csr_offsets().data()),
         adjacency_(g.csr_adjacency().data()),
@@ -223,7 +224,7 @@ class CompactLaneDegreeSums {
   }
 
   /// TieMode::mean: scales the lanes_to_rescale of this level by mean_rescale_factor(), as
-  /// BitParallelDegreeSums does.
+  /// BlockBfsDegreeSums does.
   void rescale_large_counts(std::uint64_t active_lanes, const double* level_max_count) {
     const std::uint64_t large = lanes_to_rescale(active_lanes, level_max_count);
     if (!large) return;

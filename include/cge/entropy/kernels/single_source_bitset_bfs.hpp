@@ -1,6 +1,6 @@
 #pragma once
-// Delta(s, k) of one source, level by level, on adjacency bitsets: the same computation as
-// SingleSourceDegreeSums (single_source_degree_sums.hpp), with the same interface and the same
+// Single-source BFS on adjacency bitsets: Delta(s, k) of one source, level by level, the same
+// computation as SingleSourceBfsDegreeSums (single_source_bfs.hpp), with the same interface and the same
 // floating-point operations in the same order, so its rows are bit for bit that kernel's.
 //
 // Why a second kernel. On the small dense graphs a frame gives (a few hundred nodes, mean degree
@@ -18,9 +18,9 @@
 #include <vector>
 
 #include "cge/core/bits.hpp"
-#include "cge/entropy/bit_parallel_degree_sums.hpp"
 #include "cge/entropy/degree_sum_table.hpp"
-#include "cge/entropy/single_source_degree_sums.hpp"
+#include "cge/entropy/kernels/mean_rescale.hpp"
+#include "cge/entropy/kernels/single_source_bfs.hpp"
 #include "cge/graph/adjacency_bitsets.hpp"
 #include "cge/graph/graph.hpp"
 
@@ -28,10 +28,10 @@ namespace cge {
 namespace detail {
 
 template <TieMode Mode, typename Scalar>
-class BitsetSingleSourceDegreeSums : public SingleSourceLevel<Mode> {
+class SingleSourceBitsetBfsDegreeSums : public SingleSourceLevel<Mode> {
  public:
   /// rows: the adjacency bitsets of g, which must outlive this object.
-  BitsetSingleSourceDegreeSums(const Graph<Scalar>& g, const AdjacencyBitsets& rows)
+  SingleSourceBitsetBfsDegreeSums(const Graph<Scalar>& g, const AdjacencyBitsets& rows)
       : SingleSourceLevel<Mode>(static_cast<std::size_t>(g.num_nodes())),
         rows_(rows),
         degree_(static_cast<std::size_t>(g.num_nodes())),
@@ -43,7 +43,7 @@ class BitsetSingleSourceDegreeSums : public SingleSourceLevel<Mode> {
     for (std::int32_t v = 0; v < g.num_nodes(); ++v) degree_[static_cast<std::size_t>(v)] = g.degree(v);
   }
 
-  /// As SingleSourceDegreeSums::run: after each level k = 1, 2, ... it calls on_level(k, Delta(source, k))
+  /// As SingleSourceBfsDegreeSums::run: after each level k = 1, 2, ... it calls on_level(k, Delta(source, k))
   /// and stops when that returns false; returns the last level computed. Inside on_level,
   /// level_begin() .. level_end() and node_term(u) (SingleSourceLevel) describe level k.
   template <typename OnLevel>

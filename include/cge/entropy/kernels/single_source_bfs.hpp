@@ -1,6 +1,8 @@
 #pragma once
-// Delta(s, k) of one source, level by level, with a caller that may stop after any level: the BFS
-// dynamic programme of shortest_path_degree_sums.hpp for a single source (ALGORITHMS.md section 4).
+// Single-source BFS on neighbour lists: Delta(s, k) of one source, level by level, with a caller
+// that may stop after any level (what DegreeDegreeEntropy::compute_index needs: a search is cut as
+// soon as its node weighs nothing). The BFS dynamic programme of shortest_path_degree_sums.hpp for
+// a single source (docs/METHOD.md section 4).
 //
 // It performs the documented floating-point operations in the documented order (a node sums its
 // predecessors in ascending node order, the product N_p |d(p) - d(u)| rounded on its own in the
@@ -15,15 +17,15 @@
 #include <limits>
 #include <vector>
 
-#include "cge/entropy/bit_parallel_degree_sums.hpp"
 #include "cge/entropy/degree_sum_table.hpp"
+#include "cge/entropy/kernels/mean_rescale.hpp"
 #include "cge/graph/graph.hpp"
 
 namespace cge {
 namespace detail {
 
 /// What a single-source kernel exposes during its on_level calls: the level's nodes and their terms.
-/// The kernels (SingleSourceDegreeSums, BitsetSingleSourceDegreeSums) keep N and S here.
+/// The kernels (SingleSourceBfsDegreeSums, SingleSourceBitsetBfsDegreeSums) keep N and S here.
 template <TieMode Mode>
 class SingleSourceLevel {
  public:
@@ -48,9 +50,9 @@ class SingleSourceLevel {
 };
 
 template <TieMode Mode, typename Scalar>
-class SingleSourceDegreeSums : public SingleSourceLevel<Mode> {
+class SingleSourceBfsDegreeSums : public SingleSourceLevel<Mode> {
  public:
-  explicit SingleSourceDegreeSums(const Graph<Scalar>& g)
+  explicit SingleSourceBfsDegreeSums(const Graph<Scalar>& g)
       : SingleSourceLevel<Mode>(static_cast<std::size_t>(g.num_nodes())),
         offsets_(g.csr_offsets().data()),
         adjacency_(g.csr_adjacency().data()),

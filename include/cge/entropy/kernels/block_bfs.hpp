@@ -1,8 +1,9 @@
 #pragma once
-// The portable kernel of shortest_path_degree_sums (ALGORITHMS.md section 4): the BFS dynamic
-// programme from 64 sources at once, one bit per source, with the values of every (node, source)
-// kept in one node-indexed block of 64 lanes. Also what every kernel shares: the grouping of
-// sources into blocks and the rescaling rule of TieMode::mean.
+// Block BFS: the portable kernel of shortest_path_degree_sums (docs/METHOD.md section 4). The BFS
+// dynamic programme runs from a block of 64 sources at once, one bit per source ("lane"), with
+// the values of every (node, source) kept in one node-indexed block of 64 lanes: one word
+// operation finds, for an arc, every source of the block that uses it as a shortest-path step.
+// Also the grouping of sources into blocks, which the AVX-512 block kernel shares.
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +13,7 @@
 
 #include "cge/core/bits.hpp"
 #include "cge/entropy/degree_sum_table.hpp"
+#include "cge/entropy/kernels/mean_rescale.hpp"
 #include "cge/graph/graph.hpp"
 
 namespace cge {
@@ -52,24 +54,6 @@ std::vector<std::int32_t> local_source_order(const Graph<Scalar>& g) {
   return order;
 }
 
-/// TieMode::mean needs only the ratio S / N, and every later level is linear in this one, so a
-/// source whose path counts grow huge has its whole level scaled by mean_rescale_factor(): exact
-/// (a power of two), and N never overflows however tie-rich the graph. TieMode::all needs the true
-/// sums and reports overflow instead. The rule: a level is rescaled when its largest count passed
-/// 2^512. Every kernel, block or single-source, applies it through these functions.
-inline bool mean_level_needs_rescale(double level_max_count) { return level_max_count > std::ldexp(1.0, 512); }
-inline double mean_rescale_factor() { return std::ldexp(1.0, -512); }
-
-/// The lanes of `active_lanes` whose level needs rescaling (level_max_count[lane]: largest count).
-inline std::uint64_t lanes_to_rescale(std::uint64_t active_lanes, const double* level_max_count) {
-  std::uint64_t large = 0;
-  for (std::uint64_t m = active_lanes; m; m &= m - 1) {
-    const int i = lowest_bit(m);
-    if (mean_level_needs_rescale(level_max_count[i])) large |= std::uint64_t(1) << i;
-  }
-  return large;
-}
-
 /// Delta rows of up to 64 sources at once. Level-synchronous BFS with one bit per source:
 ///   reach_k[u] = (OR over neighbours p of reach_{k-1}[p]) & ~visited[u]
 /// and, for each arc p -> u, the sources for which p is a shortest-path predecessor of u are
@@ -78,9 +62,9 @@ inline std::uint64_t lanes_to_rescale(std::uint64_t active_lanes, const double* 
 /// predecessors in ascending order, so the floating-point result is the same whatever block the
 /// source is in.
 template <TieMode Mode, typename Scalar>
-class BitParallelDegreeSums {
+class BlockBfsDegreeSums {
  public:
-  explicit BitParallelDegreeSums(const Graph<Scalar>& g)
+  explicit BlockBfsDegreeSums(const Graph<Scalar>& g)
       : g_(g),
         n_(g.num_nodes()),
         previous_(static_cast<std::size_t>(n_), 0),
