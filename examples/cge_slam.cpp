@@ -140,7 +140,6 @@ struct Options {
   bool frames_given = false;
   int reference_min_observations = cge::slam::MappingSettings{}.reference_min_observations;
   int keyframe_interval = cge::PatchKeyframeSettings<double>{}.interval_frames;  // mode YMK: k
-  double keyframe_tracking_ratio = cge::PatchKeyframeSettings<double>{}.tracking_ratio;  // mode YMK
   int orb_spread = cge::slam::OrbSettings{}.spread_oversampling;
   int local_ba_iterations = cge::slam::LocalMappingSettings{}.bundle.solver.max_iterations;
   int local_ba_rounds_per_frame = cge::slam::LocalMappingSettings{}.ba_rounds_per_frame;
@@ -597,7 +596,6 @@ nlohmann::ordered_json make_summary(const cge::slam::System& system, const Optio
                            {"local_ba_fixed", used.local_mapping.fixed_keyframes},
                            {"reference_min_observations", used.mapping.reference_min_observations},
                            {"keyframe_interval", used.patch_keyframes.interval_frames},
-                           {"keyframe_tracking_ratio", used.patch_keyframes.tracking_ratio},
                            {"keyframe_min_gap", used.orbslam2_keyframes.min_frame_gap},
                            {"orb_spread", used.frame.orb.spread_oversampling},
                            {"local_ba_iterations", used.local_mapping.bundle.solver.max_iterations},
@@ -761,7 +759,6 @@ int run(Options opt) {
       opt.depth_estimate == "mask_pixels" ? cge::DepthEstimate::mask_pixels : cge::DepthEstimate::box_samples;
   settings.mapping.reference_min_observations = opt.reference_min_observations;
   settings.patch_keyframes.interval_frames = opt.keyframe_interval;
-  settings.patch_keyframes.tracking_ratio = opt.keyframe_tracking_ratio;
   settings.frame.orb.spread_oversampling = opt.orb_spread;
   settings.local_mapping.bundle.solver.max_iterations = opt.local_ba_iterations;
   settings.local_mapping.ba_rounds_per_frame = opt.local_ba_rounds_per_frame;
@@ -1219,10 +1216,6 @@ int main(int argc, char** argv) {
   app.add_option("--orb-spread", opt.orb_spread,
                  "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")
       ->check(CLI::Range(1, 8));
-  app.add_option("--keyframe-tracking-ratio", opt.keyframe_tracking_ratio,
-                 "mode YMK: a frame tracking fewer map points than this share of its reference keyframe's "
-                 "becomes a keyframe at once (0: off)")
-      ->check(CLI::Range(0.0, 0.99));
   app.add_option("--keyframe-interval", opt.keyframe_interval,
                  "mode YMK: frames per interval of the patch keyframe selector (k; its best candidate is inserted "
                  "at the end of each interval)")

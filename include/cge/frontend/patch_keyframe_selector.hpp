@@ -64,10 +64,6 @@ struct PatchKeyframeSettings {
   /// Tracking guard floor: fewer tracked map points than this inserts at once (ours, not the
   /// paper's; ORB-SLAM2 declares tracking lost under 30 inliers, so 50 leaves a margin).
   int tracking_floor = 50;
-  /// Relative tracking guard: fewer tracked map points than this share of the reference keyframe's
-  /// inserts at once, in [0, 1) (ours, not the paper's; 0 = off). The patch histograms do not see
-  /// a camera rolling about its axis or moving along it, while the map points it tracks run out.
-  double tracking_ratio = 0.0;
 
   // Rule switches for ablations (all on reproduces the method).
   bool use_candidate_test = true;   ///< off: every frame with features is a candidate
@@ -89,7 +85,6 @@ struct PatchKeyframeSettings {
     }
     if (instance_change_threshold < 1) fail("instance_change_threshold (Num_th) must be at least 1");
     if (tracking_floor < 0) fail("tracking_floor must not be negative");
-    if (!(tracking_ratio >= 0 && tracking_ratio < 1)) fail("tracking_ratio must lie in [0, 1)");
   }
 };
 
@@ -160,9 +155,7 @@ class PatchKeyframeSelector {
     m.reference_tracked_points = ref.tracked_points;
     m.frames_since_reference = static_cast<int>(cur.step - ref.step);
 
-    if (settings.use_tracking_guard &&
-        (cur.tracked_points < settings.tracking_floor ||
-         cur.tracked_points < settings.tracking_ratio * static_cast<double>(ref.tracked_points))) {
+    if (settings.use_tracking_guard && cur.tracked_points < settings.tracking_floor) {
       d.rule = KeyframeRule::tracking_guard;
     } else if (settings.use_semantic_change &&
                std::abs(cur.instance_count - ref.instance_count) >= settings.instance_change_threshold) {
