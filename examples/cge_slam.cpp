@@ -1210,8 +1210,8 @@ int main(int argc, char** argv) {
                  "Ceres iterations per round of the local BA (its time budget per keyframe; 2 rounds)")
       ->check(CLI::Range(1, 1000));
   app.add_option("--local-ba-rounds-per-frame", opt.local_ba_rounds_per_frame,
-                 "local BA rounds solved per frame: the keyframe's frame solves the first, the next frames the "
-                 "rest (1), or all in the keyframe's frame (2)")
+                 "local BA rounds solved per frame: 1 solves the first in the keyframe's frame and the second "
+                 "in the next frame before it is tracked, 2 both in the keyframe's frame (same outputs, other times)")
       ->check(CLI::Range(1, 2));
   app.add_option("--orb-spread", opt.orb_spread,
                  "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")

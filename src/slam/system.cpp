@@ -140,6 +140,10 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
     record.moving_kept = moving.moving_kept;
   }
 
+  // The rounds of the previous keyframe's BA left for this frame, before it is tracked: the
+  // frame is tracked in the map as the whole BA leaves it.
+  advance_local_mapping(record);
+
   t = Clock::now();
   TrackResult track = tracker_.track(frame, map_);
   time_of(record, Stage::tracking) = elapsed_ms(t);
@@ -156,7 +160,6 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
   record.T_world_camera = track.T_world_camera;
   records_.push_back(record);
   const std::size_t index = records_.size() - 1;
-  advance_local_mapping();  // the previous keyframe's BA goes on while frames are tracked
 
   t = Clock::now();
   const auto triggered_ms = [&] {
@@ -249,7 +252,7 @@ void System::apply_decision(const KeyframeDecision<double>& decision, Frame* cur
 
 int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::size_t record, const char* rule,
                             std::size_t current_record) {
-  flush_local_mapping();  // the previous keyframe's BA ends before the map changes
+  flush_local_mapping(records_.back());  // the previous keyframe's BA ends before the map changes
   Keyframe kf;
   kf.frame_index = frame.index;
   kf.timestamp_s = frame.timestamp_s;
@@ -268,8 +271,9 @@ int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::s
   }
   const int id = map_.add_keyframe(std::move(kf));
   for (int i = 0; i < frame.size(); ++i) {
+    // A point erased since the frame was tracked (a BA finished above culled it) is not observed.
     const std::int64_t tracked = track.map_point_ids[static_cast<std::size_t>(i)];
-    if (tracked >= 0) map_.add_observation(tracked, id, i);
+    if (tracked >= 0 && !map_.map_point(tracked).bad) map_.add_observation(tracked, id, i);
   }
   // New points from depth, nearest first, every untracked static keypoint under max_new_point_depth_m;
   // with only_close_new_points, far ones only until the keyframe observes min_new_points (ORB-SLAM2's
@@ -331,7 +335,7 @@ void System::local_mapping(int keyframe_id) {
   }
 }
 
-void System::advance_local_mapping() {
+void System::advance_local_mapping(FrameRecord& charged) {
   if (local_ba_ == nullptr) return;
   const auto start = Clock::now();
   const int rounds = settings_.local_mapping.ba_rounds_per_frame;
@@ -340,21 +344,21 @@ void System::advance_local_mapping() {
   } else {
     for (int i = 0; i < rounds; ++i) local_ba_->solve_next_round(map_);
   }
-  time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start);
+  time_of(charged, Stage::local_mapping) += elapsed_ms(start);
   if (!local_ba_->done()) return;
   const int keyframe_id = local_ba_->keyframe_id();
   local_ba_.reset();
-  complete_keyframe(keyframe_id);
+  complete_keyframe(keyframe_id, charged);
 }
 
-void System::flush_local_mapping() {
+void System::flush_local_mapping(FrameRecord& charged) {
   if (local_ba_ == nullptr) return;
   const auto start = Clock::now();
   local_ba_->solve_remaining_rounds(map_);
-  time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start);
+  time_of(charged, Stage::local_mapping) += elapsed_ms(start);
   const int keyframe_id = local_ba_->keyframe_id();
   local_ba_.reset();
-  complete_keyframe(keyframe_id);
+  complete_keyframe(keyframe_id, charged);
 }
 
 void System::after_keyframe_inserted(int keyframe_id) {
@@ -362,13 +366,13 @@ void System::after_keyframe_inserted(int keyframe_id) {
   local_mapping(keyframe_id);
   time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_local);
   if (local_ba_ != nullptr) {
-    advance_local_mapping();
+    advance_local_mapping(records_.back());
   } else {
-    complete_keyframe(keyframe_id);
+    complete_keyframe(keyframe_id, records_.back());
   }
 }
 
-void System::complete_keyframe(int keyframe_id) {
+void System::complete_keyframe(int keyframe_id, FrameRecord& charged) {
   const LocalMappingSettings& lm = settings_.local_mapping;
   if (lm.cull_keyframes) {
     const auto start_cull = Clock::now();
@@ -379,7 +383,7 @@ void System::complete_keyframe(int keyframe_id) {
     int reference = tracker_.reference_keyframe();
     while (reference >= 0 && map_.keyframe(reference).culled) reference = map_.keyframe(reference).parent;
     tracker_.set_reference_keyframe(reference);
-    time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_cull);
+    time_of(charged, Stage::local_mapping) += elapsed_ms(start_cull);
   }
   // Loop closing (docs/METHOD.md section 7): the closer reads map_ (a KeyframeDatabaseView) and
   // its decision becomes a LoopRecord. The correction of an accepted loop (pose-graph
@@ -403,7 +407,7 @@ void System::complete_keyframe(int keyframe_id) {
   r.verified_keyframes = d.verified_keyframes;
   r.connected_keyframes = d.connected_keyframes;
   loops_.push_back(std::move(r));
-  time_of(records_.back(), Stage::loop_closing) += elapsed_ms(start);
+  time_of(charged, Stage::loop_closing) += elapsed_ms(start);
 
   if (!d.accepted || !settings_.loop_correction.enabled) return;
   loop_edges_.push_back(LoopEdge{d.match_keyframe, keyframe_id, d.T_match_query});
@@ -415,7 +419,7 @@ void System::complete_keyframe(int keyframe_id) {
   correct_loop(keyframe_id);
   last_correction_keyframe_ = keyframe_id;
   ++corrections_;
-  time_of(records_.back(), Stage::optimisation) += elapsed_ms(start_optimisation);
+  time_of(charged, Stage::optimisation) += elapsed_ms(start_optimisation);
 }
 
 void System::correct_loop(int query_keyframe) {
@@ -515,7 +519,7 @@ void System::finish() {
   const KeyframeDecision<double> decision = keyframe_policy_.flush();
   apply_decision(decision, nullptr, nullptr, 0);
   pending_.clear();
-  if (!records_.empty()) flush_local_mapping();
+  if (!records_.empty()) flush_local_mapping(records_.back());
 }
 
 Eigen::Isometry3d System::pose_of(const FrameRecord& record) const {

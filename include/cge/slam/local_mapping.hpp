@@ -50,11 +50,9 @@ BundleObservation keyframe_bundle_observation(const Keyframe& kf, int keypoint_i
                                               double orb_scale_factor, double depth_sigma_per_m);
 
 /// The local bundle adjustment of one keyframe's window, solved a round at a time so that the
-/// pipeline can spread its rounds over the frames that follow (LocalMappingSettings::
-/// ba_rounds_per_frame), as ORB-SLAM2's local-mapping thread optimises while tracking goes on.
-/// Between rounds the map must not change structurally (no keyframe inserted or culled, no point
-/// erased or fused); tracking may read it. Every round writes the window's poses and points into the
-/// map, so the frames tracked meanwhile see the partly optimised window.
+/// pipeline can spread its rounds over frames (LocalMappingSettings::ba_rounds_per_frame). Between
+/// rounds the map must not change structurally (no keyframe inserted or culled, no point erased or
+/// fused). Every round writes the window's poses and points into the map.
 class LocalBundleAdjustment {
  public:
   /// Collects the window, its fixed observers, points and observations from the map (nothing is

@@ -188,11 +188,11 @@ struct LocalMappingSettings {
   int fixed_keyframes = 10;
   /// Depth standard deviation: sigma_z = depth_sigma_per_m * z^2 (Kinect-like growth), 1/m, > 0.
   double depth_sigma_per_m = 0.003;
-  /// Local-BA rounds solved per camera frame, >= 1: the keyframe's frame solves the first, each
-  /// following frame the next, and the keyframe culling and loop closing of that keyframe wait for
-  /// the last (a serial stand-in for ORB-SLAM2's local-mapping thread, which optimises while
-  /// tracking goes on; a new keyframe, a loop or the end of the run first finishes what is left).
-  /// One round per frame keeps a keyframe's frame from stalling the stream; >= bundle.rounds solves
+  /// Local-BA rounds solved per camera frame, >= 1: the keyframe's frame solves the first round,
+  /// the next frame the second before it is tracked, and only then are the keyframe's redundant
+  /// keyframes culled and its loop closed. Every frame is tracked in the map the whole BA leaves, as
+  /// before, and the outputs are the same byte for byte; only the time moves: a keyframe's frame no
+  /// longer carries the whole BA (ORB-SLAM2 runs it in a thread of its own). >= bundle.rounds solves
   /// the whole BA in the keyframe's frame.
   int ba_rounds_per_frame = 1;
   /// Rounds, loss and iterations: a Huber round and a plain round on the chi2 inliers, as ORB-SLAM2.

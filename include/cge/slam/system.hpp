@@ -165,13 +165,13 @@ class System {
   /// Map maintenance around a new keyframe and the start of its local BA (LocalMappingSettings),
   /// timed as local_mapping.
   void local_mapping(int keyframe_id);
-  /// Solves the pending local BA's rounds of this frame (ba_rounds_per_frame); when it is done, the
-  /// keyframe's local mapping ends (complete_keyframe).
-  void advance_local_mapping();
+  /// Solves the pending local BA's rounds of a frame (ba_rounds_per_frame); when it is done, the
+  /// keyframe's local mapping ends (complete_keyframe). The time goes to `charged`'s stages.
+  void advance_local_mapping(FrameRecord& charged);
   /// Solves what is left of the pending local BA (before the map changes, and at the end).
-  void flush_local_mapping();
+  void flush_local_mapping(FrameRecord& charged);
   /// After a keyframe's local BA: redundant keyframes culled, then loop closing and correction.
-  void complete_keyframe(int keyframe_id);
+  void complete_keyframe(int keyframe_id, FrameRecord& charged);
   static constexpr std::size_t kNoRecord = static_cast<std::size_t>(-1);
   /// Keeps record's pose relative to keyframe_id's pose as it is now (see pose_of).
   void keep_relative_to(std::size_t record, int keyframe_id);
