@@ -4,6 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "cge/core/splitmix64.hpp"
 #include "cge/segmentation/coco_classes.hpp"
 
 namespace cge {
@@ -44,19 +45,14 @@ constexpr double kScreenLapStepM = 0.003;
 /// Deterministic random numbers for scene variation (splitmix64; portable, unlike std distributions).
 class Rng {
  public:
-  explicit Rng(std::uint64_t seed) : state_(seed) {}
-  std::uint64_t next() {
-    std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
-  double uniform(double lo, double hi) { return lo + (hi - lo) * static_cast<double>(next() >> 11) * 0x1.0p-53; }
+  explicit Rng(std::uint64_t seed) : stream_(seed) {}
+  std::uint64_t next() { return stream_.next(); }
+  double uniform(double lo, double hi) { return lo + (hi - lo) * stream_.next_unit(); }
   std::size_t index(std::size_t n) { return static_cast<std::size_t>(next() % n); }
   std::uint32_t salt() { return static_cast<std::uint32_t>(next() >> 32); }
 
  private:
-  std::uint64_t state_;
+  SplitMix64 stream_;
 };
 
 Eigen::Vector3f rgb(double r, double g, double b) {
