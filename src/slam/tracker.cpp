@@ -1,8 +1,6 @@
 #include "cge/slam/tracker.hpp"
 
 #include <algorithm>
-#include <climits>
-#include <cmath>
 #include <set>
 #include <stdexcept>
 #include <string>
