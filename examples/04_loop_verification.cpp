@@ -1,12 +1,12 @@
 // Example 4: verifying loop candidates by combinatorial graph entropy (docs/METHOD.md sections 3-6).
 //
-// What LoopCloser (cge/slam/loop_closer.hpp) does in its step 3 for a candidate keyframe, with the
-// core components alone: each frame's stable keypoints become a graph (GraphBuilder); the semantic
-// pre-judgment compares the static objects; the degree-degree information index I (and, when the
-// layout changed, the edge entropy H_W) of the two graphs give S_sum; the candidate passes when
-// it scores best and S_sum reaches LoopCloserSettings::min_cge_score (0.5). The settings are
-// LoopCloser's defaults (exponents scaled by their mean). A revisit wins over another place; note how
-// little S_sum separates them (docs/LOOP_CLOSING.md: geometry rejects most false candidates).
+// What LoopCloser (cge/slam/loop_closer.hpp) does in its step 3 in mode cge (the paper's ranking),
+// with the core components alone: each frame's stable keypoints become a graph (GraphBuilder); the
+// semantic pre-judgment compares the static objects; the degree-degree information index I (and,
+// when the layout changed, the edge entropy H_W) of the two graphs give S_sum; the best candidate
+// passes when S_sum reaches LoopCloserSettings::min_cge_score (0.5). Exponents are scaled by their
+// mean, as LoopCloser's defaults say. A revisit wins over another place; note how little S_sum
+// separates them (docs/LOOP_CLOSING.md: geometry rejects most false candidates).
 
 #include <cstdio>
 #include <random>

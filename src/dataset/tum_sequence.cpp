@@ -7,6 +7,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "cge/dataset/tum_layout.hpp"
 #include "cge/dataset/tum_list.hpp"
 #include "cge/io/stderr_capture.hpp"
 #include "cge/metrics/tum_trajectory_io.hpp"
@@ -17,13 +18,7 @@ namespace dataset {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr const char* kRgbList = "rgb.txt";
-constexpr const char* kDepthList = "depth.txt";
-constexpr const char* kAssociationsFile = "associations.txt";
-constexpr const char* kGroundTruthFile = "groundtruth.txt";
-constexpr const char* kMasksDir = "masks";
-constexpr const char* kSegmentationDir = "segmentation";
-constexpr const char* kCameraFile = "camera.yaml";
+using namespace tum_layout;
 
 std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
 

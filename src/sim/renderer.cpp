@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "cge/core/splitmix64.hpp"
 #include "texture.hpp"
 
 namespace cge {
@@ -22,13 +23,6 @@ constexpr std::int32_t kNoPrimitive = -1;  // in the primitive-index buffer
 constexpr double kPi = 3.14159265358979323846;
 
 // ---- per-pixel random numbers: counter-based, a function of (seed, frame, pixel) only ------------
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
 
 /// A 32-bit hash of a pixel index under a frame key (multiply-xorshift).
 std::uint32_t pixel_hash(std::uint32_t pixel, std::uint32_t key) {

@@ -9,6 +9,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "cge/core/splitmix64.hpp"
 #include "cge/opencv/disc_kernel.hpp"
 
 namespace cge {
@@ -16,20 +17,6 @@ namespace sim {
 namespace {
 
 constexpr int kMaxLabel = std::numeric_limits<std::uint16_t>::max();
-
-// splitmix64 (Steele, Lea, Flood 2014): its increment and finaliser constants.
-constexpr std::uint64_t kSplitMixIncrement = 0x9E3779B97F4A7C15ULL;
-constexpr std::uint64_t kSplitMixMul1 = 0xBF58476D1CE4E5B9ULL;
-constexpr std::uint64_t kSplitMixMul2 = 0x94D049BB133111EBULL;
-// A double in [0, 1) from the top 53 bits of a 64-bit word.
-constexpr int kMantissaShift = 64 - 53;
-constexpr double kTwoToMinus53 = 1.0 / 9007199254740992.0;
-
-std::uint64_t mix64(std::uint64_t z) {
-  z = (z ^ (z >> 30)) * kSplitMixMul1;
-  z = (z ^ (z >> 27)) * kSplitMixMul2;
-  return z ^ (z >> 31);
-}
 
 /// What a stream of random numbers decides; each decision has its own stream, so changing one
 /// probability never changes another decision.
@@ -39,22 +26,21 @@ enum class Decision : std::uint64_t { miss = 1, feet = 2, false_positive = 3 };
 /// started from a hash of the four, so it is independent of everything else that is drawn.
 class DrawStream {
  public:
-  DrawStream(std::uint64_t seed, int frame_index, std::uint64_t instance_id, Decision decision) {
-    std::uint64_t h = mix64(seed + kSplitMixIncrement);
-    h = mix64(h ^ (static_cast<std::uint64_t>(frame_index) + kSplitMixIncrement));
-    h = mix64(h ^ (instance_id + kSplitMixIncrement));
-    state_ = mix64(h ^ (static_cast<std::uint64_t>(decision) + kSplitMixIncrement));
-  }
+  DrawStream(std::uint64_t seed, int frame_index, std::uint64_t instance_id, Decision decision)
+      : stream_(start(seed, frame_index, instance_id, decision)) {}
   /// Uniform in [0, 1).
-  double uniform() {
-    state_ += kSplitMixIncrement;
-    return static_cast<double>(mix64(state_) >> kMantissaShift) * kTwoToMinus53;
-  }
+  double uniform() { return stream_.next_unit(); }
   /// Uniform in [lo, hi].
   double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
 
  private:
-  std::uint64_t state_;
+  static std::uint64_t start(std::uint64_t seed, int frame_index, std::uint64_t instance_id, Decision decision) {
+    std::uint64_t h = splitmix64(seed);
+    h = splitmix64_mix(h ^ (static_cast<std::uint64_t>(frame_index) + kSplitMix64Increment));
+    h = splitmix64_mix(h ^ (instance_id + kSplitMix64Increment));
+    return splitmix64_mix(h ^ (static_cast<std::uint64_t>(decision) + kSplitMix64Increment));
+  }
+  SplitMix64 stream_;
 };
 
 /// Instance bounding box, inclusive pixel bounds.

@@ -15,6 +15,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "cge/dataset/tum_layout.hpp"
+#include "cge/metrics/tum_trajectory_io.hpp"
 #include "cge/segmentation/coco_classes.hpp"
 
 namespace cge {
@@ -25,13 +27,7 @@ namespace {
 constexpr int kMaxPngCompression = 9;
 constexpr std::size_t kLabelCount = std::size_t{std::numeric_limits<std::uint16_t>::max()} + 1;
 
-// Folders and files of the layout (tum_writer.hpp).
-constexpr const char* kRgbDir = "rgb";
-constexpr const char* kDepthDir = "depth";
-constexpr const char* kMaskDir = "masks";
-constexpr const char* kSegmentationDir = "segmentation";
-constexpr const char* kInstancesFile = "instances.csv";
-constexpr const char* kPngExtension = ".png";
+using namespace dataset::tum_layout;
 
 // ORB-SLAM2 reads Viewer.* in its viewer thread; absent keys would read as 0. TUM3.yaml's values.
 constexpr std::array<std::pair<const char*, const char*>, 10> kOrbSlamViewerDefaults = {{
@@ -82,7 +78,7 @@ std::vector<std::uint8_t> encode_png(const cv::Mat& image, int compression, cons
     // Without a compression parameter OpenCV takes its speed path (zlib level 1, RLE, SUB filter).
     const std::vector<int> params =
         compression == kPngFast ? std::vector<int>{} : std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, compression};
-    ok = cv::imencode(kPngExtension, image, bytes, params);
+    ok = cv::imencode(kImageExtension, image, bytes, params);
   } catch (const cv::Exception& e) {
     throw std::runtime_error(std::string("cannot encode the ") + what + " image as PNG: " + e.what());
   }
@@ -101,14 +97,6 @@ std::string yaml_real(double x) {
 }
 
 /// printf-style "%.<decimals>f" without a minus sign on a value that prints as zero.
-std::string fixed(double x, int decimals) {
-  std::array<char, 64> buf{};
-  std::snprintf(buf.data(), buf.size(), "%.*f", decimals, x);
-  std::string s(buf.data());
-  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-  return s;
-}
-
 void require_image(const cv::Mat& image, int type, const PinholeCamera& camera, const std::string& what, int frame) {
   if (image.type() != type || image.cols != camera.width_px || image.rows != camera.height_px) {
     throw std::invalid_argument("frame " + std::to_string(frame) + ": the " + what + " image must be " +
@@ -161,32 +149,12 @@ bool same_instance(const InstanceInfo& a, const InstanceInfo& b) {
 
 // ---- formats ------------------------------------------------------------------------------------
 
-std::string format_tum_timestamp(double timestamp_s) { return fixed(timestamp_s, 6); }
+std::string format_tum_timestamp(double timestamp_s) { return metrics::format_tum_timestamp(timestamp_s); }
 
-Eigen::Quaterniond canonical_quaternion(const Eigen::Matrix3d& R) {
-  Eigen::Quaterniond q(R);
-  q.normalize();
-  const Eigen::Vector4d c = q.coeffs();  // x, y, z, w
-  bool flip = c.w() < 0;
-  if (c.w() == 0) {
-    for (int i = 0; i < 3; ++i) {
-      if (c[i] != 0) {
-        flip = c[i] < 0;
-        break;
-      }
-    }
-  }
-  if (flip) q.coeffs() = -q.coeffs();
-  return q;
-}
+Eigen::Quaterniond canonical_quaternion(const Eigen::Matrix3d& R) { return metrics::canonical_quaternion(R); }
 
 std::string format_tum_pose(double timestamp_s, const Eigen::Isometry3d& T_world_camera) {
-  constexpr int kPoseDecimals = 9;
-  const Eigen::Vector3d t = T_world_camera.translation();
-  const Eigen::Quaterniond q = canonical_quaternion(T_world_camera.linear());
-  std::string line = format_tum_timestamp(timestamp_s);
-  for (const double v : {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()}) line += " " + fixed(v, kPoseDecimals);
-  return line;
+  return metrics::format_tum_pose(timestamp_s, T_world_camera, metrics::TumDigits::decimals_9);
 }
 
 std::string format_instances_csv(const std::vector<InstanceInfo>& instances) {
@@ -325,7 +293,7 @@ TumSequenceWriter::TumSequenceWriter(fs::path out_dir, const PinholeCamera& came
   }
   check_instance_table(scene_instances_, "the sequence's instance table");
   check_output_folder(out_dir_, settings_.force);
-  for (const char* sub : {kRgbDir, kDepthDir, kMaskDir, kSegmentationDir}) make_folder(out_dir_ / sub);
+  for (const char* sub : {kRgbDir, kDepthDir, kMasksDir, kSegmentationDir}) make_folder(out_dir_ / sub);
 }
 
 void TumSequenceWriter::write_frame(const RenderedFrame& frame, const SegmentationResult& segmentation) {
@@ -395,10 +363,10 @@ void TumSequenceWriter::write_checked(const RenderedFrame& frame, const Segmenta
 
   const EncodedFrame own = encoded ? EncodedFrame{} : encode_frame(frame, segmentation, settings_.png_compression);
   const EncodedFrame& bytes = encoded ? *encoded : own;
-  const std::string file = stem + kPngExtension;
+  const std::string file = stem + kImageExtension;
   write_file(out_dir_ / kRgbDir / file, bytes.rgb);
   write_file(out_dir_ / kDepthDir / file, bytes.depth);
-  write_file(out_dir_ / kMaskDir / file, bytes.mask);
+  write_file(out_dir_ / kMasksDir / file, bytes.mask);
   write_file(out_dir_ / kSegmentationDir / file, bytes.segmentation);
 
   timestamps_.push_back(frame.timestamp_s);
@@ -419,11 +387,11 @@ void TumSequenceWriter::finish(const std::vector<LoopPair>& loops) {
     }
   }
 
-  write_file(out_dir_ / kMaskDir / kInstancesFile, format_instances_csv(scene_instances_));
+  write_file(out_dir_ / kMasksDir / kInstancesFile, format_instances_csv(scene_instances_));
   std::vector<InstanceInfo> segmentation_instances = scene_instances_;
   segmentation_instances.insert(segmentation_instances.end(), false_positives_.begin(), false_positives_.end());
   write_file(out_dir_ / kSegmentationDir / kInstancesFile, format_instances_csv(segmentation_instances));
-  write_file(out_dir_ / "camera.yaml", format_camera_yaml(camera_, frame_rate_hz_, settings_));
+  write_file(out_dir_ / kCameraFile, format_camera_yaml(camera_, frame_rate_hz_, settings_));
 
   const std::string source_line = "# file: '" + settings_.description + "'\n";
   std::string rgb = "# color images\n" + source_line + "# timestamp filename\n";
@@ -432,17 +400,17 @@ void TumSequenceWriter::finish(const std::vector<LoopPair>& loops) {
   std::string groundtruth = "# ground truth trajectory\n" + source_line + "# timestamp tx ty tz qx qy qz qw\n";
   for (int i = 0; i < n; ++i) {
     const std::string& s = stems_[static_cast<std::size_t>(i)];
-    rgb += s + " " + kRgbDir + "/" + s + kPngExtension + "\n";
-    depth += s + " " + kDepthDir + "/" + s + kPngExtension + "\n";
+    rgb += s + " " + kRgbDir + "/" + s + kImageExtension + "\n";
+    depth += s + " " + kDepthDir + "/" + s + kImageExtension + "\n";
     associations +=
-        s + " " + kRgbDir + "/" + s + kPngExtension + " " + s + " " + kDepthDir + "/" + s + kPngExtension + "\n";
+        s + " " + kRgbDir + "/" + s + kImageExtension + " " + s + " " + kDepthDir + "/" + s + kImageExtension + "\n";
     groundtruth +=
         format_tum_pose(timestamps_[static_cast<std::size_t>(i)], poses_[static_cast<std::size_t>(i)]) + "\n";
   }
-  write_file(out_dir_ / "rgb.txt", rgb);
-  write_file(out_dir_ / "depth.txt", depth);
-  write_file(out_dir_ / "associations.txt", associations);
-  write_file(out_dir_ / "groundtruth.txt", groundtruth);
+  write_file(out_dir_ / kRgbList, rgb);
+  write_file(out_dir_ / kDepthList, depth);
+  write_file(out_dir_ / kAssociationsFile, associations);
+  write_file(out_dir_ / kGroundTruthFile, groundtruth);
 
   std::string loop_text =
       "# ground-truth loops: the query frame revisits the place seen in the match frame (match < query)\n"
@@ -453,7 +421,7 @@ void TumSequenceWriter::finish(const std::vector<LoopPair>& loops) {
                  stems_[static_cast<std::size_t>(loop.match_frame)] + " " + std::to_string(loop.query_frame) + " " +
                  std::to_string(loop.match_frame) + "\n";
   }
-  write_file(out_dir_ / "loops.txt", loop_text);
+  write_file(out_dir_ / kLoopsFile, loop_text);
   finished_ = true;
 }
 

@@ -10,6 +10,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "cge/core/splitmix64.hpp"
 #include "cge/opencv.hpp"
 
 namespace cge {
@@ -18,11 +19,9 @@ namespace slam {
 int Frame::count(FeatureLabel label) const { return static_cast<int>(std::count(labels.begin(), labels.end(), label)); }
 
 std::uint64_t frame_seed(std::uint64_t seed, int frame_index) {
-  // splitmix64 of the seed advanced by the index: distinct, well-mixed seeds per frame.
-  std::uint64_t z = seed + 0x9E3779B97F4A7C15ULL * (static_cast<std::uint64_t>(frame_index) + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
+  // Output frame_index + 1 of a splitmix64 stream seeded with the run's seed: distinct, well-mixed
+  // seeds per frame, each computed directly.
+  return splitmix64_nth(seed, static_cast<std::uint64_t>(frame_index) + 1);
 }
 
 FrameMaker::FrameMaker(const SystemSettings& settings, const PinholeIntrinsics<double>& intrinsics)

@@ -2,19 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <map>
-#include <set>
 #include <sstream>
 #include <stdexcept>
 
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
-#include <opencv2/features2d.hpp>
-
 #include "cge/opencv/keypoint.hpp"
 #include "cge/opencv/mask.hpp"
-#include "cge/slam/two_nearest_descriptors.hpp"
+#include "cge/slam/geometry/descriptor_matching.hpp"
+#include "cge/slam/geometry/pnp_ransac.hpp"
 
 namespace cge {
 namespace slam {
@@ -230,61 +225,36 @@ void LoopCloser::geometric_check(const Keyframe& current, const Keyframe& match,
 
   // Nearest and second-nearest match row for every query row (Hamming), ratio and distance tests,
   // then one query per match row (the closest; the smaller query index on ties).
-  const cv::Mat qd = select_rows(current.descriptors, query_rows);
-  const cv::Mat md = select_rows(match.descriptors, match_rows);
-  const std::vector<std::vector<cv::DMatch>> knn = two_nearest_descriptors(qd, md);
-  std::map<int, cv::DMatch> by_match_row;  // keyed by match row index: deterministic order
-  for (const auto& k : knn) {
-    if (k.empty()) continue;
-    const cv::DMatch& best = k[0];
-    if (best.distance > static_cast<float>(settings_.max_descriptor_distance)) continue;
-    if (k.size() > 1 && !(best.distance < static_cast<float>(settings_.descriptor_ratio) * k[1].distance)) continue;
-    auto it = by_match_row.find(best.trainIdx);
-    if (it == by_match_row.end() || best.distance < it->second.distance ||
-        (best.distance == it->second.distance && best.queryIdx < it->second.queryIdx)) {
-      by_match_row[best.trainIdx] = best;
-    }
-  }
-  decision.tentative_matches = static_cast<int>(by_match_row.size());
+  const std::vector<DescriptorPair> pairs_by_row =
+      match_descriptors_one_to_one(select_rows(current.descriptors, query_rows),
+                                   select_rows(match.descriptors, match_rows), settings_.max_descriptor_distance,
+                                   settings_.descriptor_ratio);
+  decision.tentative_matches = static_cast<int>(pairs_by_row.size());
   decision.matched_points = decision.tentative_matches;
   if (decision.tentative_matches <= settings_.min_matched_points) return;
 
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
   std::vector<std::pair<int, int>> pairs;  // (query keypoint, match keypoint)
-  for (const auto& kv : by_match_row) {
-    const int q = query_rows[static_cast<std::size_t>(kv.second.queryIdx)];
-    const int m = match_rows[static_cast<std::size_t>(kv.first)];
+  for (const DescriptorPair& row_pair : pairs_by_row) {
+    const int q = query_rows[static_cast<std::size_t>(row_pair.query)];
+    const int m = match_rows[static_cast<std::size_t>(row_pair.train)];
     const Eigen::Vector3d& p = match.points_camera_m[static_cast<std::size_t>(m)];
     object.emplace_back(p.x(), p.y(), p.z());
     image.emplace_back(undistorted_position(current, static_cast<std::size_t>(q)));
     pairs.emplace_back(q, m);
   }
   decision.reason = LoopReason::pose_not_robust;
-  const cv::Matx33d K(camera_.fx_px, 0, camera_.cx_px, 0, camera_.fy_px, camera_.cy_px, 0, 0, 1);
-  cv::Mat rvec, tvec;
-  std::vector<int> inliers;
-  bool ok = false;
-  try {
-    ok = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, settings_.pnp_iterations,
-                            static_cast<float>(settings_.pnp_reprojection_error_px), settings_.pnp_confidence, inliers,
-                            cv::SOLVEPNP_EPNP);
-  } catch (const cv::Exception&) {
-    ok = false;  // degenerate configuration: no robust pose
-  }
-  decision.matched_points = static_cast<int>(inliers.size());
-  if (!ok || static_cast<int>(inliers.size()) <= settings_.min_matched_points) return;
-  cv::Mat R;
-  cv::Rodrigues(rvec, R);
-  Eigen::Matrix3d R_e;
-  Eigen::Vector3d t_e;
-  cv::cv2eigen(R, R_e);
-  cv::cv2eigen(tvec, t_e);
-  if (!R_e.allFinite() || !t_e.allFinite()) return;
-  Eigen::Isometry3d T_query_match = Eigen::Isometry3d::Identity();  // maps match-camera points to the query camera
-  T_query_match.linear() = R_e;
-  T_query_match.translation() = t_e;
-  decision.T_match_query = T_query_match.inverse();
+  PnpRansacSettings pnp;
+  pnp.iterations = settings_.pnp_iterations;
+  pnp.reprojection_px = settings_.pnp_reprojection_error_px;
+  pnp.confidence = settings_.pnp_confidence;
+  PnpRansacResult solved = solve_pnp_ransac(object, image, camera_, pnp);
+  decision.matched_points = static_cast<int>(solved.inliers.size());
+  if (!solved.ok || static_cast<int>(solved.inliers.size()) <= settings_.min_matched_points) return;
+  // T_camera_object maps match-camera points into the query camera.
+  decision.T_match_query = solved.T_camera_object.inverse();
+  std::vector<int>& inliers = solved.inliers;
   std::sort(inliers.begin(), inliers.end());
   decision.inlier_pairs.clear();
   for (int i : inliers) decision.inlier_pairs.push_back(pairs[static_cast<std::size_t>(i)]);
@@ -292,110 +262,86 @@ void LoopCloser::geometric_check(const Keyframe& current, const Keyframe& match,
   decision.accepted = true;
 }
 
-LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabaseView& map) {
-  if (current.id != processed_) {
-    throw std::invalid_argument("LoopCloser::process: keyframe id " + std::to_string(current.id) + ", expected " +
-                                std::to_string(processed_) + " (one call per keyframe, in id order)");
+LoopCloser::Scores::Scores(LoopCloser& closer, const Keyframe& current, const KeyframeDatabaseView& map,
+                           const Candidates& candidates)
+    : closer_(closer), current_(current), map_(map), bow_score_(candidates.bow_score) {
+  for (int c : candidates.ids) best_candidate_bow_ = std::max(best_candidate_bow_, bow(c));
+  const LoopCloserSettings& s = closer_.settings_;
+  threshold_ = s.scoring == LoopScoring::bow_only ? s.min_bow_score : s.min_cge_score;
+}
+
+double LoopCloser::Scores::cge(int id) {
+  auto it = cge_memo_.find(id);
+  if (it != cge_memo_.end()) return it->second;
+  const double s = closer_.cge_score(current_, map_.keyframe(id));
+  cge_memo_.emplace(id, s);
+  return s;
+}
+
+double LoopCloser::Scores::member(int id) {
+  const double b = bow(id);
+  switch (closer_.settings_.scoring) {
+    case LoopScoring::bow_only:
+      return b;
+    case LoopScoring::combined:
+      return best_candidate_bow_ > 0 ? cge(id) * b / best_candidate_bow_ : 0.0;
+    case LoopScoring::cge:
+      break;
   }
-  const int width = static_cast<int>(image_.width_px);
-  const int height = static_cast<int>(image_.height_px);
-  check_keyframe(current, width, height);
-  cache_.resize(static_cast<std::size_t>(processed_) + 1);
+  return cge(id);
+}
 
-  LoopDecision decision;
-  decision.query_keyframe = current.id;
-  const cv::Mat static_descriptors = select_rows(current.descriptors, static_feature_rows(current));
-  const std::vector<BowQueryMatch> bow = model_->query(static_descriptors);
+bool LoopCloser::Scores::passes_gate(int id) {
+  const double value = closer_.settings_.scoring == LoopScoring::bow_only ? bow(id) : cge(id);
+  return value >= threshold_;
+}
 
-  // Step 1: candidates.
-  std::vector<char> excluded(static_cast<std::size_t>(current.id) + 1, 0);
+LoopCloser::Candidates LoopCloser::query_candidates(const Keyframe& current, const std::vector<BowQueryMatch>& bow,
+                                                    const KeyframeDatabaseView& map, LoopDecision& decision) const {
+  Candidates out;
+  out.excluded.assign(static_cast<std::size_t>(current.id) + 1, 0);
   for (int id = std::max(0, current.id - settings_.recent_keyframes_excluded); id <= current.id; ++id) {
-    excluded[static_cast<std::size_t>(id)] = 1;
+    out.excluded[static_cast<std::size_t>(id)] = 1;
   }
   for (int id : map.covisible_keyframes(current.id, -1)) {
     if (id < 0 || id >= current.id) continue;
-    excluded[static_cast<std::size_t>(id)] = 1;
+    out.excluded[static_cast<std::size_t>(id)] = 1;
     decision.connected_keyframes.push_back(id);
   }
   std::sort(decision.connected_keyframes.begin(), decision.connected_keyframes.end());
-  std::vector<double> bow_score(static_cast<std::size_t>(current.id) + 1, 0.0);
+  out.bow_score.assign(static_cast<std::size_t>(current.id) + 1, 0.0);
   int best_common = 0;
   for (const BowQueryMatch& m : bow) {
     if (m.keyframe_id < 0 || m.keyframe_id >= current.id) continue;
-    bow_score[static_cast<std::size_t>(m.keyframe_id)] = m.score;
-    if (!excluded[static_cast<std::size_t>(m.keyframe_id)]) best_common = std::max(best_common, m.common_words);
+    out.bow_score[static_cast<std::size_t>(m.keyframe_id)] = m.score;
+    if (!out.excluded[static_cast<std::size_t>(m.keyframe_id)]) best_common = std::max(best_common, m.common_words);
   }
-  std::vector<int> candidates;
   for (const BowQueryMatch& m : bow) {
-    if (m.keyframe_id < 0 || m.keyframe_id >= current.id || excluded[static_cast<std::size_t>(m.keyframe_id)]) continue;
+    if (m.keyframe_id < 0 || m.keyframe_id >= current.id || out.excluded[static_cast<std::size_t>(m.keyframe_id)]) {
+      continue;
+    }
     if (m.common_words > 0 && m.common_words >= settings_.min_common_words_ratio * best_common) {
-      candidates.push_back(m.keyframe_id);
+      out.ids.push_back(m.keyframe_id);
     }
   }
-  std::sort(candidates.begin(), candidates.end());
-  decision.candidates = static_cast<int>(candidates.size());
+  std::sort(out.ids.begin(), out.ids.end());
+  return out;
+}
 
-  auto finish = [&]() {
-    model_->add(current.id, static_descriptors);
-    ++processed_;
-    return decision;
-  };
-  if (candidates.empty()) {
-    consistent_groups_.clear();
-    decision.reason = LoopReason::no_candidates;
-    return finish();
-  }
-
-  // Steps 2 and 3: groups and their scores.
-  double best_candidate_bow = 0;
-  for (int c : candidates) best_candidate_bow = std::max(best_candidate_bow, bow_score[static_cast<std::size_t>(c)]);
-  std::map<int, double> cge_memo;
-  auto cge_of = [&](int id) {
-    auto it = cge_memo.find(id);
-    if (it != cge_memo.end()) return it->second;
-    const double s = cge_score(current, map.keyframe(id));
-    cge_memo.emplace(id, s);
-    return s;
-  };
-  auto member_score = [&](int id) {
-    const double b = bow_score[static_cast<std::size_t>(id)];
-    switch (settings_.scoring) {
-      case LoopScoring::bow_only:
-        return b;
-      case LoopScoring::combined:
-        return best_candidate_bow > 0 ? cge_of(id) * b / best_candidate_bow : 0.0;
-      case LoopScoring::cge:
-        break;
-    }
-    return cge_of(id);
-  };
-  // The gate of step 3: the BoW score in bow_only mode, S_sum otherwise (also in combined mode,
-  // whose product only ranks).
-  const double threshold =
-      settings_.scoring == LoopScoring::bow_only ? settings_.min_bow_score : settings_.min_cge_score;
-  auto gate_value = [&](int id) {
-    return settings_.scoring == LoopScoring::bow_only ? bow_score[static_cast<std::size_t>(id)] : cge_of(id);
-  };
-
-  struct Scored {
-    Group group;
-    std::vector<std::pair<double, int>> scored_members;  // (step-3 score, id), best first
-    double total = 0;
-    int best = -1;
-    int consistency = 0;  // step 4; 0 when the group's best member fails the gate
-  };
-  std::vector<Scored> groups;
-  for (int c : candidates) {
-    Scored s;
+std::vector<LoopCloser::ScoredGroup> LoopCloser::score_groups(const Keyframe& current, const Candidates& candidates,
+                                                              const KeyframeDatabaseView& map, Scores& scores) const {
+  std::vector<ScoredGroup> groups;
+  for (int c : candidates.ids) {
+    ScoredGroup s;
     s.group.members.push_back(c);
     for (int id : map.covisible_keyframes(c, settings_.group_size)) {
-      if (id < 0 || id >= current.id || excluded[static_cast<std::size_t>(id)]) continue;
+      if (id < 0 || id >= current.id || candidates.excluded[static_cast<std::size_t>(id)]) continue;
       if (std::find(s.group.members.begin(), s.group.members.end(), id) == s.group.members.end()) {
         s.group.members.push_back(id);
       }
     }
     for (int id : s.group.members) {
-      const double v = member_score(id);
+      const double v = scores.member(id);
       s.total += v;
       s.scored_members.emplace_back(v, id);
     }
@@ -407,20 +353,26 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
     s.best = s.scored_members.front().second;
     groups.push_back(std::move(s));
   }
-  // Groups by descending total, the earlier candidate on ties: [0] is the best group.
-  std::vector<std::size_t> order(groups.size());
-  for (std::size_t g = 0; g < order.size(); ++g) order[g] = g;
-  std::stable_sort(order.begin(), order.end(),
-                   [&groups](std::size_t a, std::size_t b) { return groups[a].total > groups[b].total; });
-  const Scored& chosen = groups[order.front()];
-  decision.match_keyframe = chosen.best;
-  decision.bow_score = bow_score[static_cast<std::size_t>(chosen.best)];
-  decision.cge_score = cge_of(chosen.best);
+  return groups;
+}
 
-  // Step 4: continuity over the groups that passed the threshold.
+namespace {
+
+/// Group indices by descending total, the earlier candidate on ties: [0] is the best group, the
+/// one whose best member is the match unless geometry picks another.
+std::vector<std::size_t> rank_groups_by_total(const std::vector<double>& totals) {
+  std::vector<std::size_t> order(totals.size());
+  for (std::size_t g = 0; g < order.size(); ++g) order[g] = g;
+  std::stable_sort(order.begin(), order.end(), [&totals](std::size_t a, std::size_t b) { return totals[a] > totals[b]; });
+  return order;
+}
+
+}  // namespace
+
+void LoopCloser::update_consistency(std::vector<ScoredGroup>& groups, Scores& scores) {
   std::vector<Group> next;
-  for (Scored& scored : groups) {
-    if (!(gate_value(scored.best) >= threshold)) continue;
+  for (ScoredGroup& scored : groups) {
+    if (!scores.passes_gate(scored.best)) continue;
     Group grp = scored.group;
     int previous = 0;
     for (const Group& old : consistent_groups_) {
@@ -436,22 +388,23 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
     next.push_back(std::move(grp));
   }
   consistent_groups_ = std::move(next);
+}
 
-  // Step 5: geometry of the verifiable groups' best members; the most inliers wins.
-  // Groups overlap (each holds a candidate's covisible keyframes), so one keyframe can be a member
-  // of many: it is checked once, and a repeat counts towards verified_members without a second
-  // check (the check is deterministic, and the earlier attempt wins ties in choose_verification).
+std::vector<LoopDecision> LoopCloser::verify_geometry(const Keyframe& current, const KeyframeDatabaseView& map,
+                                                      const std::vector<ScoredGroup>& groups,
+                                                      const std::vector<std::size_t>& order, Scores& scores) const {
+  const ScoredGroup& chosen = groups[order.front()];
   std::vector<LoopDecision> attempts;
   std::vector<int> verified;
   for (std::size_t g : order) {
-    const Scored& scored = groups[g];
+    const ScoredGroup& scored = groups[g];
     if (scored.consistency < settings_.consistent_keyframes) continue;
     if (!settings_.verify_all_consistent_groups && g != order.front()) continue;
     if (scored.total < settings_.min_group_total_ratio * chosen.total) continue;
     int checked = 0;
     for (const auto& member : scored.scored_members) {
       if (checked == settings_.verified_members) break;
-      if (!(gate_value(member.second) >= threshold)) continue;
+      if (!scores.passes_gate(member.second)) continue;
       ++checked;
       if (std::find(verified.begin(), verified.end(), member.second) != verified.end()) continue;
       verified.push_back(member.second);
@@ -461,14 +414,19 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
       attempts.push_back(std::move(attempt));
     }
   }
+  return attempts;
+}
+
+void LoopCloser::decide(std::vector<LoopDecision>& attempts, int chosen_best, Scores& scores,
+                        LoopDecision& decision) const {
   if (attempts.empty()) {
-    decision.reason = gate_value(chosen.best) >= threshold ? LoopReason::continuity : LoopReason::low_score;
-    return finish();
+    decision.reason = scores.passes_gate(chosen_best) ? LoopReason::continuity : LoopReason::low_score;
+    return;
   }
   LoopDecision& kept = attempts[static_cast<std::size_t>(choose_verification(attempts))];
   decision.match_keyframe = kept.match_keyframe;
-  decision.bow_score = bow_score[static_cast<std::size_t>(kept.match_keyframe)];
-  decision.cge_score = cge_of(kept.match_keyframe);
+  decision.bow_score = scores.bow(kept.match_keyframe);
+  decision.cge_score = scores.cge(kept.match_keyframe);
   decision.matched_points = kept.matched_points;
   decision.tentative_matches = kept.tentative_matches;
   decision.accepted = kept.accepted;
@@ -476,7 +434,42 @@ LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabase
   decision.T_match_query = kept.T_match_query;
   decision.inlier_pairs = std::move(kept.inlier_pairs);
   decision.verified_keyframes = static_cast<int>(attempts.size());
-  return finish();
+}
+
+LoopDecision LoopCloser::process(const Keyframe& current, const KeyframeDatabaseView& map) {
+  if (current.id != processed_) {
+    throw std::invalid_argument("LoopCloser::process: keyframe id " + std::to_string(current.id) + ", expected " +
+                                std::to_string(processed_) + " (one call per keyframe, in id order)");
+  }
+  check_keyframe(current, static_cast<int>(image_.width_px), static_cast<int>(image_.height_px));
+  cache_.resize(static_cast<std::size_t>(processed_) + 1);
+
+  LoopDecision decision;
+  decision.query_keyframe = current.id;
+  const cv::Mat static_descriptors = select_rows(current.descriptors, static_feature_rows(current));
+  const Candidates candidates = query_candidates(current, model_->query(static_descriptors), map, decision);
+  decision.candidates = static_cast<int>(candidates.ids.size());
+  if (candidates.ids.empty()) {
+    consistent_groups_.clear();  // the chain of consistent groups breaks
+    decision.reason = LoopReason::no_candidates;
+  } else {
+    Scores scores(*this, current, map, candidates);
+    std::vector<ScoredGroup> groups = score_groups(current, candidates, map, scores);
+    std::vector<double> totals;
+    for (const ScoredGroup& g : groups) totals.push_back(g.total);
+    const std::vector<std::size_t> order = rank_groups_by_total(totals);
+    // The best group's best member is the match unless a verified one replaces it.
+    const int chosen_best = groups[order.front()].best;
+    decision.match_keyframe = chosen_best;
+    decision.bow_score = scores.bow(chosen_best);
+    decision.cge_score = scores.cge(chosen_best);
+    update_consistency(groups, scores);
+    std::vector<LoopDecision> attempts = verify_geometry(current, map, groups, order, scores);
+    decide(attempts, chosen_best, scores, decision);
+  }
+  model_->add(current.id, static_descriptors);
+  ++processed_;
+  return decision;
 }
 
 }  // namespace slam

@@ -9,6 +9,7 @@
 #include <Eigen/SVD>
 
 #include "cge/bow/binary_descriptor.hpp"
+#include "cge/slam/geometry/nearest_two.hpp"
 
 namespace cge {
 namespace slam {
@@ -370,7 +371,7 @@ TriangulationReport triangulate_new_points(Map& map, int keyframe_id, const Pinh
       const double line_norm2 = line.x() * line.x() + line.y() * line.y();
       if (!(line_norm2 > 0)) continue;
       const std::uint8_t* d1 = kf1.descriptors.ptr<std::uint8_t>(i);
-      int best = INT_MAX, second = INT_MAX, best_j = -1;
+      NearestTwo nearest;
       for (int j = 0; j < static_cast<int>(kf2.keypoints.size()); ++j) {
         if (used[static_cast<std::size_t>(j)] || !usable_for_triangulation(kf2, j)) continue;
         const cv::Point2f& p2 = kf2.undistorted_px[static_cast<std::size_t>(j)];
@@ -383,19 +384,11 @@ TriangulationReport triangulate_new_points(Map& map, int keyframe_id, const Pinh
         }
         const double num = line.x() * p2.x + line.y() * p2.y + line.z();
         if (!(num * num / line_norm2 < s.triangulation_epipolar_chi2 * sigma2)) continue;
-        const int d = bow::hamming_distance_32_bytes(d1, kf2.descriptors.ptr<std::uint8_t>(j));
-        if (d < best) {
-          second = best;
-          best = d;
-          best_j = j;
-        } else if (d < second) {
-          second = d;
-        }
+        nearest.add(j, bow::hamming_distance_32_bytes(d1, kf2.descriptors.ptr<std::uint8_t>(j)));
       }
-      if (best_j < 0 || best > s.triangulation_max_hamming) continue;
-      if (second != INT_MAX && !(best < s.triangulation_ratio * second)) continue;
-      used[static_cast<std::size_t>(best_j)] = 1;
-      matches.emplace_back(i, best_j);
+      if (!nearest.passes(s.triangulation_max_hamming, s.triangulation_ratio)) continue;
+      used[static_cast<std::size_t>(nearest.best_index)] = 1;
+      matches.emplace_back(i, nearest.best_index);
     }
     report.matches += static_cast<int>(matches.size());
 

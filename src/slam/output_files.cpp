@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "cge/metrics/tum_trajectory_io.hpp"
+
 namespace cge {
 namespace slam {
 
@@ -16,13 +18,7 @@ std::string format(const char* fmt, double v) {
 }  // namespace
 
 std::string tum_pose_line(double timestamp_s, const Eigen::Isometry3d& T_world_camera) {
-  Eigen::Quaterniond q(T_world_camera.linear());
-  q.normalize();
-  if (q.w() < 0) q.coeffs() = -q.coeffs();
-  const Eigen::Vector3d& t = T_world_camera.translation();
-  std::string line = format("%.6f", timestamp_s);
-  for (const double v : {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()}) line += " " + format("%.9g", v);
-  return line;
+  return metrics::format_tum_pose(timestamp_s, T_world_camera, metrics::TumDigits::significant_9);
 }
 
 void write_trajectory(std::ostream& out, const System& system) {

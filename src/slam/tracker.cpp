@@ -1,18 +1,13 @@
 #include "cge/slam/tracker.hpp"
 
 #include <algorithm>
-#include <climits>
-#include <cmath>
 #include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
-#include <opencv2/calib3d.hpp>
-#include <opencv2/features2d.hpp>
-
-#include "cge/bow/binary_descriptor.hpp"
-#include "cge/slam/two_nearest_descriptors.hpp"
+#include "cge/slam/geometry/descriptor_matching.hpp"
+#include "cge/slam/geometry/pnp_ransac.hpp"
 
 namespace cge {
 namespace slam {
@@ -35,83 +30,8 @@ const char* to_string(TrackingState state) {
 
 namespace {
 
-constexpr int kGridCellPx = 16;           // bucket size of the keypoint grid, pixels
 constexpr int kMinPnpPoints = 6;          // fewer correspondences cannot give a RANSAC pose
 constexpr double kMinPointDepthM = 0.05;  // map points closer to the camera are not projected
-
-/// The static keypoints of a frame bucketed by pixel, for window queries.
-class KeypointGrid {
- public:
-  explicit KeypointGrid(const Frame& frame)
-      : cols_((frame.image_size.width + kGridCellPx - 1) / kGridCellPx),
-        rows_((frame.image_size.height + kGridCellPx - 1) / kGridCellPx),
-        cells_(static_cast<std::size_t>(cols_ * rows_)) {
-    for (int i = 0; i < frame.size(); ++i) {
-      if (!frame.is_static(i)) continue;
-      const cv::Point2f& p = frame.undistorted_px[static_cast<std::size_t>(i)];
-      cells_[static_cast<std::size_t>(cell_row(p.y) * cols_ + cell_col(p.x))].push_back(i);
-    }
-  }
-
-  /// Calls f(i) for the static keypoints in cells overlapping the square window, by cell then index.
-  template <typename F>
-  void for_each_near(double u, double v, double radius, F&& f) const {
-    const int c0 = cell_col(u - radius), c1 = cell_col(u + radius);
-    const int r0 = cell_row(v - radius), r1 = cell_row(v + radius);
-    for (int r = r0; r <= r1; ++r) {
-      for (int c = c0; c <= c1; ++c) {
-        for (const int i : cells_[static_cast<std::size_t>(r * cols_ + c)]) f(i);
-      }
-    }
-  }
-
- private:
-  int cell_col(double x) const { return std::clamp(static_cast<int>(std::floor(x / kGridCellPx)), 0, cols_ - 1); }
-  int cell_row(double y) const { return std::clamp(static_cast<int>(std::floor(y / kGridCellPx)), 0, rows_ - 1); }
-  int cols_, rows_;
-  std::vector<std::vector<int>> cells_;
-};
-
-struct KeypointMatch {
-  int index = -1;          ///< keypoint, -1: none
-  int distance = INT_MAX;  ///< Hamming distance, bits
-};
-
-/// The static keypoint within radius_px of (u, v) whose descriptor is nearest to `descriptor`
-/// (32-byte row); none when the nearest is farther than max_hamming or fails the ratio test
-/// against the second nearest. Candidates are visited by grid cell, then index (deterministic).
-KeypointMatch best_keypoint_near(const Frame& frame, const KeypointGrid& grid, double u, double v, double radius_px,
-                                 const std::uint8_t* descriptor, int max_hamming, double ratio) {
-  const double radius_sq = radius_px * radius_px;
-  int best = INT_MAX, second = INT_MAX, best_index = -1;
-  grid.for_each_near(u, v, radius_px, [&](int i) {
-    const cv::Point2f& kp = frame.undistorted_px[static_cast<std::size_t>(i)];
-    const double du = kp.x - u, dv = kp.y - v;
-    if (du * du + dv * dv > radius_sq) return;
-    const int d = bow::hamming_distance_32_bytes(descriptor, frame.descriptors.ptr<std::uint8_t>(i));
-    if (d < best) {
-      second = best;
-      best = d;
-      best_index = i;
-    } else if (d < second) {
-      second = d;
-    }
-  });
-  if (best_index < 0 || best > max_hamming) return {};
-  if (second != INT_MAX && best >= ratio * second) return {};
-  return {best_index, best};
-}
-
-Eigen::Isometry3d from_rvec_tvec(const cv::Mat& rvec, const cv::Mat& tvec) {
-  cv::Mat R;
-  cv::Rodrigues(rvec, R);
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) T.linear()(r, c) = R.at<double>(r, c);
-    T.translation()(r) = tvec.at<double>(r);
-  }
-  return T;
-}
 
 }  // namespace
 
@@ -150,31 +70,40 @@ std::vector<std::int64_t> Tracker::local_map_points(const Map& map, int centre) 
   return points;
 }
 
+ProjectionSearch Tracker::projection_search(double radius_px, bool require_in_image) const {
+  ProjectionSearch search;
+  search.radius_px = radius_px;
+  search.max_hamming = settings_.max_hamming;
+  search.ratio = settings_.ratio;
+  search.min_depth_m = kMinPointDepthM;
+  search.require_in_image = require_in_image;
+  return search;
+}
+
 int Tracker::match_by_projection(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
                                  const Eigen::Isometry3d& T_world_camera, double radius_px,
                                  std::vector<std::int64_t>& matches, std::vector<std::int64_t>* visible) const {
-  const KeypointGrid grid(frame);
-  matches.assign(static_cast<std::size_t>(frame.size()), -1);
-  std::vector<int> best_distance(static_cast<std::size_t>(frame.size()), INT_MAX);
-  const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
+  std::vector<PointToProject> projected;
+  projected.reserve(points.size());
   for (const std::int64_t id : points) {
     const MapPoint& mp = map.map_point(id);
-    const Eigen::Vector3d p_camera = T_camera_world * mp.position_world;
-    if (p_camera.z() < kMinPointDepthM) continue;
-    const Eigen::Vector2d uv = intrinsics_.project(p_camera);
-    if (!frame.undistorted_bounds.contains(uv.x(), uv.y())) continue;
-    if (visible != nullptr) visible->push_back(id);
-    const std::uint8_t* descriptor = mp.descriptor.ptr<std::uint8_t>(0);
-    const KeypointMatch m =
-        best_keypoint_near(frame, grid, uv.x(), uv.y(), radius_px, descriptor, settings_.max_hamming, settings_.ratio);
-    if (m.index < 0) continue;
-    auto& slot = best_distance[static_cast<std::size_t>(m.index)];
-    if (m.distance < slot) {
-      slot = m.distance;
-      matches[static_cast<std::size_t>(m.index)] = id;
-    }
+    projected.push_back(PointToProject{mp.position_world, mp.descriptor.ptr<std::uint8_t>(0)});
   }
-  return static_cast<int>(std::count_if(matches.begin(), matches.end(), [](std::int64_t m) { return m >= 0; }));
+  std::vector<int> in_image;
+  const std::vector<int> source = cge::slam::match_by_projection(frame, KeypointGrid(frame), intrinsics_, projected,
+                                                                 T_world_camera, projection_search(radius_px, true),
+                                                                 visible != nullptr ? &in_image : nullptr);
+  if (visible != nullptr) {
+    for (const int k : in_image) visible->push_back(points[static_cast<std::size_t>(k)]);
+  }
+  matches.assign(static_cast<std::size_t>(frame.size()), -1);
+  int count = 0;
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    if (source[i] < 0) continue;
+    matches[i] = points[static_cast<std::size_t>(source[i])];
+    ++count;
+  }
+  return count;
 }
 
 bool Tracker::ransac_pose(const Frame& frame, const Map& map, const std::vector<std::int64_t>& matches, int min_inliers,
@@ -201,16 +130,13 @@ bool Tracker::ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
     image.emplace_back(uv.x, uv.y);
   }
   if (static_cast<int>(object.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
-  const cv::Matx33d K(intrinsics_.fx_px, 0, intrinsics_.cx_px, 0, intrinsics_.fy_px, intrinsics_.cy_px, 0, 0, 1);
-  cv::Mat rvec, tvec;
-  std::vector<int> inliers;
-  // EPnP on minimal samples and, at the end, on all inliers (no iterative refinement here: the
-  // Ceres refinement follows).
-  const bool ok = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, settings_.pnp_iterations,
-                                     static_cast<float>(settings_.pnp_reprojection_px), settings_.pnp_confidence,
-                                     inliers, cv::SOLVEPNP_EPNP);
-  if (!ok || static_cast<int>(inliers.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
-  T_world_camera = from_rvec_tvec(rvec, tvec).inverse();
+  PnpRansacSettings pnp;
+  pnp.iterations = settings_.pnp_iterations;
+  pnp.reprojection_px = settings_.pnp_reprojection_px;
+  pnp.confidence = settings_.pnp_confidence;
+  const PnpRansacResult solved = solve_pnp_ransac(object, image, intrinsics_, pnp);
+  if (!solved.ok || static_cast<int>(solved.inliers.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
+  T_world_camera = solved.T_camera_object.inverse();
   return T_world_camera.matrix().allFinite();
 }
 
@@ -290,33 +216,23 @@ bool Tracker::track_last_frame(const Frame& frame, const Map& map, const Eigen::
   if (last_points_camera_m_.empty()) return false;
   // Projection matching of the previous frame's static keypoints with depth (temporary points, as
   // ORB-SLAM2's RGB-D motion model does) within the wide window: one frame of motion at most.
-  const KeypointGrid grid(frame);
-  const Eigen::Isometry3d T_camera_world = prediction.inverse();
-  const double radius_px = settings_.search_radius_px * settings_.wide_search_factor;
-  std::vector<int> best_distance(static_cast<std::size_t>(frame.size()), INT_MAX);
-  std::vector<int> source(static_cast<std::size_t>(frame.size()), -1);
+  std::vector<PointToProject> projected;
+  projected.reserve(last_points_camera_m_.size());
   for (std::size_t k = 0; k < last_points_camera_m_.size(); ++k) {
-    const Eigen::Vector3d p_world = T_world_last_ * last_points_camera_m_[k];
-    const Eigen::Vector3d p_camera = T_camera_world * p_world;
-    if (p_camera.z() < kMinPointDepthM) continue;
-    const Eigen::Vector2d uv = intrinsics_.project(p_camera);
-    const std::uint8_t* descriptor = last_descriptors_.ptr<std::uint8_t>(static_cast<int>(k));
-    const KeypointMatch m =
-        best_keypoint_near(frame, grid, uv.x(), uv.y(), radius_px, descriptor, settings_.max_hamming, settings_.ratio);
-    if (m.index < 0) continue;
-    auto& slot = best_distance[static_cast<std::size_t>(m.index)];
-    if (m.distance < slot) {
-      slot = m.distance;
-      source[static_cast<std::size_t>(m.index)] = static_cast<int>(k);
-    }
+    projected.push_back(PointToProject{T_world_last_ * last_points_camera_m_[k],
+                                       last_descriptors_.ptr<std::uint8_t>(static_cast<int>(k))});
   }
+  // No in-image test: a point projecting just outside the image still finds keypoints at its edge.
+  const std::vector<int> source = cge::slam::match_by_projection(
+      frame, KeypointGrid(frame), intrinsics_, projected, prediction,
+      projection_search(settings_.search_radius_px * settings_.wide_search_factor, false));
   std::vector<int> keypoints;
   std::vector<Eigen::Vector3d> points_world;
   for (int i = 0; i < frame.size(); ++i) {
     const int k = source[static_cast<std::size_t>(i)];
     if (k < 0) continue;
     keypoints.push_back(i);
-    points_world.push_back(T_world_last_ * last_points_camera_m_[static_cast<std::size_t>(k)]);
+    points_world.push_back(projected[static_cast<std::size_t>(k)].position_world);
   }
   if (static_cast<int>(keypoints.size()) < settings_.min_matches) return false;
   Eigen::Isometry3d T_ransac;
@@ -405,16 +321,12 @@ bool Tracker::relocalise(const Frame& frame, const Map& map, Attempt& out) const
       train_point.push_back(kf.map_point_ids[k]);
     }
     if (static_cast<int>(train_point.size()) < settings_.min_relocalisation_inliers) continue;
-    const std::vector<std::vector<cv::DMatch>> knn = two_nearest_descriptors(query, train);
     std::vector<std::int64_t> matches(static_cast<std::size_t>(frame.size()), -1);
-    std::vector<char> used(train_point.size(), 0);
-    for (const auto& m : knn) {
-      if (m.empty() || m[0].distance > static_cast<float>(settings_.max_hamming)) continue;
-      if (m.size() > 1 && m[0].distance >= settings_.ratio * m[1].distance) continue;
-      if (used[static_cast<std::size_t>(m[0].trainIdx)]) continue;
-      used[static_cast<std::size_t>(m[0].trainIdx)] = 1;
-      matches[static_cast<std::size_t>(query_index[static_cast<std::size_t>(m[0].queryIdx)])] =
-          train_point[static_cast<std::size_t>(m[0].trainIdx)];
+    // Each map point keeps the first keypoint that claims it (OneToOneRule says why not the closest).
+    for (const DescriptorPair& m : match_descriptors_one_to_one(query, train, settings_.max_hamming, settings_.ratio,
+                                                                OneToOneRule::first_claim)) {
+      matches[static_cast<std::size_t>(query_index[static_cast<std::size_t>(m.query)])] =
+          train_point[static_cast<std::size_t>(m.train)];
     }
     Eigen::Isometry3d T_ransac;
     if (!ransac_pose(frame, map, matches, settings_.min_relocalisation_inliers, T_ransac)) continue;

@@ -20,6 +20,7 @@
 #include <numeric>
 #include <vector>
 
+#include "cge/core/splitmix64.hpp"
 #include "cge/graph/graph.hpp"
 
 namespace cge {
@@ -32,13 +33,6 @@ struct TwinClasses {
 };
 
 namespace detail {
-
-inline std::uint64_t twin_hash_mix(std::uint64_t x) {  // splitmix64 finaliser
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 
 /// Whether the neighbour lists of a and b (sorted ascending), each with its own node added when
 /// `closed`, hold the same nodes.
@@ -76,9 +70,9 @@ TwinClasses twin_classes(const Graph<Scalar>& g) {
   std::vector<std::uint64_t> open_hash(size), closed_hash(size);
   for (std::int32_t v = 0; v < n; ++v) {
     std::uint64_t h = 0;
-    for (const std::int32_t u : g.neighbors(v)) h += detail::twin_hash_mix(static_cast<std::uint64_t>(u));
+    for (const std::int32_t u : g.neighbors(v)) h += splitmix64(static_cast<std::uint64_t>(u));
     open_hash[static_cast<std::size_t>(v)] = h;
-    closed_hash[static_cast<std::size_t>(v)] = h + detail::twin_hash_mix(static_cast<std::uint64_t>(v));
+    closed_hash[static_cast<std::size_t>(v)] = h + splitmix64(static_cast<std::uint64_t>(v));
   }
   std::vector<std::int32_t> order(size);
   for (const bool closed : {true, false}) {

@@ -160,14 +160,12 @@ inline Trajectory read_tum_trajectory_file(const std::string& path, const TumRea
 }
 
 
-/// One trajectory line without the newline: timestamp with 6 decimals, the rest with 9 significant
-/// digits, quaternion with qw >= 0 (when qw == 0, the first non-zero of qx, qy, qz positive).
-inline std::string format_tum_pose(const StampedPose& pose) {
-  constexpr int kTimestampDecimals = 6;
-  constexpr int kValueDigits = 9;
-  Eigen::Quaterniond q(pose.T_world_camera.linear());
+/// The quaternion of a rotation with one spelling: normalised, qw >= 0 and, when qw == 0, the first
+/// non-zero of qx, qy, qz positive (q and -q are the same rotation).
+inline Eigen::Quaterniond canonical_quaternion(const Eigen::Matrix3d& R) {
+  Eigen::Quaterniond q(R);
   q.normalize();
-  Eigen::Vector4d c = q.coeffs();  // x, y, z, w
+  const Eigen::Vector4d c = q.coeffs();  // x, y, z, w
   bool flip = c.w() < 0;
   if (c.w() == 0) {
     for (int i = 0; i < 3; ++i) {
@@ -177,14 +175,41 @@ inline std::string format_tum_pose(const StampedPose& pose) {
       }
     }
   }
-  if (flip) c = -c;
-  const Eigen::Vector3d t = pose.T_world_camera.translation();
-  std::string line = detail::format_number(pose.timestamp_s, std::chars_format::fixed, kTimestampDecimals);
-  for (const double value : {t.x(), t.y(), t.z(), c.x(), c.y(), c.z(), c.w()}) {
+  if (flip) q.coeffs() = -q.coeffs();
+  return q;
+}
+
+/// How a pose line spells its seven numbers.
+enum class TumDigits {
+  significant_9,  ///< 9 significant digits (printf %.9g): trajectories and keyframes of cge_slam
+  decimals_9,     ///< 9 decimals (printf %.9f): cge_sim's ground truth
+};
+
+/// A timestamp as TUM writes it: seconds with 6 decimals ("1305031102.175304"), one spelling of
+/// zero.
+inline std::string format_tum_timestamp(double timestamp_s) {
+  return detail::format_number(timestamp_s, std::chars_format::fixed, 6);
+}
+
+/// One pose line without the newline, "timestamp tx ty tz qx qy qz qw": the timestamp by
+/// format_tum_timestamp, the rest by `digits`, the quaternion by canonical_quaternion, one spelling
+/// of zero ("0", never "-0"). The one writer of TUM pose lines in the project.
+inline std::string format_tum_pose(double timestamp_s, const Eigen::Isometry3d& T_world_camera,
+                                   TumDigits digits = TumDigits::significant_9) {
+  const Eigen::Quaterniond q = canonical_quaternion(T_world_camera.linear());
+  const Eigen::Vector3d t = T_world_camera.translation();
+  std::string line = format_tum_timestamp(timestamp_s);
+  for (const double value : {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()}) {
     line += ' ';
-    line += detail::format_number(value, std::chars_format::general, kValueDigits);
+    line += digits == TumDigits::significant_9 ? detail::format_number(value, std::chars_format::general, 9)
+                                               : detail::format_number(value, std::chars_format::fixed, 9);
   }
   return line;
+}
+
+/// One trajectory line without the newline (format_tum_pose with 9 significant digits).
+inline std::string format_tum_pose(const StampedPose& pose) {
+  return format_tum_pose(pose.timestamp_s, pose.T_world_camera);
 }
 
 /// Writes a trajectory, preceded by "# <header>" when the header is not empty. Throws

@@ -147,16 +147,15 @@ SimulatedFrame simulate_frame(const FrameSource& source, const SegmentationError
 
 // ---- the text formats, exposed for readers and tests ----
 
-/// A timestamp as TUM writes it: seconds with 6 decimals ("1305031102.175304"); it is also the
-/// file stem of the frame's images.
+/// A timestamp as TUM writes it (metrics::format_tum_timestamp): seconds with 6 decimals
+/// ("1305031102.175304"); it is also the file stem of the frame's images.
 std::string format_tum_timestamp(double timestamp_s);
 
-/// "timestamp tx ty tz qx qy qz qw" with 6 decimals for the time and 9 for the rest; the quaternion
-/// is normalised and its sign chosen so that qw > 0 (or, when qw == 0, the first non-zero of
-/// qx, qy, qz is positive), so that a pose has one spelling.
+/// The ground-truth line: metrics::format_tum_pose with 9 decimals for every value after the
+/// timestamp (the quaternion by metrics::canonical_quaternion, so a pose has one spelling).
 std::string format_tum_pose(double timestamp_s, const Eigen::Isometry3d& T_world_camera);
 
-/// The unique quaternion of a rotation under the sign rule of format_tum_pose.
+/// metrics::canonical_quaternion: the unique quaternion of a rotation under the writer's sign rule.
 Eigen::Quaterniond canonical_quaternion(const Eigen::Matrix3d& R);
 
 /// The instances.csv of the mask-folder format (header and one line per instance, ascending id).

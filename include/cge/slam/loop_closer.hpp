@@ -27,6 +27,7 @@
 //     (choose_verification): the closest view of the place; T_match_query is its pose.
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -175,6 +176,43 @@ class LoopCloser {
     std::vector<int> members;
     int consistency = 0;
   };
+  /// Step 1's result.
+  struct Candidates {
+    std::vector<int> ids;           ///< ascending
+    std::vector<char> excluded;     ///< by keyframe id: too recent or covisible with the query
+    std::vector<double> bow_score;  ///< by keyframe id: the BoW score against the query, 0 when not returned
+  };
+  /// Steps 2 and 3 for one candidate.
+  struct ScoredGroup {
+    Group group;
+    std::vector<std::pair<double, int>> scored_members;  ///< (step-3 score, id), best first
+    double total = 0;
+    int best = -1;
+    int consistency = 0;  ///< step 4; 0 when the group's best member fails the gate
+  };
+  /// The scores of one query against its candidates and their groups; S_sum computed once per
+  /// keyframe, on first use.
+  class Scores {
+   public:
+    Scores(LoopCloser& closer, const Keyframe& current, const KeyframeDatabaseView& map,
+           const Candidates& candidates);
+    double bow(int id) const { return bow_score_[static_cast<std::size_t>(id)]; }
+    double cge(int id);
+    /// The step-3 ranking value of the scoring mode.
+    double member(int id);
+    /// The step-3 gate: the BoW score in bow_only mode, S_sum otherwise (also in combined mode,
+    /// whose product only ranks), at least the mode's threshold.
+    bool passes_gate(int id);
+
+   private:
+    LoopCloser& closer_;
+    const Keyframe& current_;
+    const KeyframeDatabaseView& map_;
+    const std::vector<double>& bow_score_;
+    double best_candidate_bow_ = 0;
+    double threshold_ = 0;
+    std::map<int, double> cge_memo_;
+  };
   struct CachedEntropies {
     bool ready = false;
     bool has_nodes = false;
@@ -183,6 +221,27 @@ class LoopCloser {
 
   double cge_score(const Keyframe& current, const Keyframe& other);
   const CachedEntropies& own_entropies(const Keyframe& kf);
+  /// Step 1: keyframes sharing enough words with the query, neither recent nor covisible with it
+  /// (those are connected already: a loop to them closes nothing). Fills connected_keyframes.
+  Candidates query_candidates(const Keyframe& current, const std::vector<BowQueryMatch>& bow,
+                              const KeyframeDatabaseView& map, LoopDecision& decision) const;
+  /// Steps 2 and 3: each candidate with its covisible keyframes, every member scored (the graph
+  /// entropy S_sum, the BoW score or both, by mode): one view scores noisily, a group of
+  /// neighbouring views of the same place less so.
+  std::vector<ScoredGroup> score_groups(const Keyframe& current, const Candidates& candidates,
+                                        const KeyframeDatabaseView& map, Scores& scores) const;
+  /// Step 4: the groups whose best member passes the gate chain with the last query's groups when
+  /// they share a keyframe; a single query's match is often chance, a place seen again over
+  /// consecutive keyframes is not.
+  void update_consistency(std::vector<ScoredGroup>& groups, Scores& scores);
+  /// Step 5: PnP on the best members of every verifiable group (`order`: groups best total first);
+  /// each keyframe checked once. Scores only rank; geometry decides whether the place is the same.
+  std::vector<LoopDecision> verify_geometry(const Keyframe& current, const KeyframeDatabaseView& map,
+                                            const std::vector<ScoredGroup>& groups,
+                                            const std::vector<std::size_t>& order, Scores& scores) const;
+  /// The outcome: the attempt choose_verification keeps, or, without attempts, why the best group
+  /// (best member `chosen_best`) stopped: low_score when it failed the gate, else continuity.
+  void decide(std::vector<LoopDecision>& attempts, int chosen_best, Scores& scores, LoopDecision& decision) const;
   /// Step 5 for one member; fills the geometric fields of `decision` (reason, matches, pose, inliers).
   void geometric_check(const Keyframe& current, const Keyframe& match, LoopDecision& decision) const;
 

@@ -6,8 +6,8 @@
 //   timings.csv     per frame and stage, milliseconds (measurements: differ between runs)
 //   frames.csv      per frame: tracking state, feature and match counts, keyframe, keypoints on
 //                   moving bodies and of those the kept ones (-1 without ground truth) (deterministic)
-// TUM lines: `timestamp tx ty tz qx qy qz qw`, timestamp with 6 decimals, the rest with 9
-// significant digits, the quaternion with qw >= 0 (one of its two signs, so output is stable).
+// TUM lines: metrics::format_tum_pose with 9 significant digits (timestamp with 6 decimals, the
+// quaternion with qw >= 0, ties at qw == 0 by the first non-zero component; one spelling of zero).
 #include <ostream>
 #include <string>
 #include <vector>

@@ -28,6 +28,7 @@
 
 #include "cge/core/pinhole_intrinsics.hpp"
 #include "cge/slam/frame.hpp"
+#include "cge/slam/geometry/projection_matching.hpp"
 #include "cge/slam/map.hpp"
 #include "cge/slam/settings.hpp"
 
@@ -99,6 +100,8 @@ class Tracker {
   bool ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
                    const std::vector<Eigen::Vector3d>& points_world, int min_inliers,
                    Eigen::Isometry3d& T_world_camera) const;
+  /// The projection search at radius_px with the tracker's descriptor tests.
+  ProjectionSearch projection_search(double radius_px, bool require_in_image) const;
   /// `visible`, when given, receives the points that project into the image (ascending id).
   int match_by_projection(const Frame& frame, const Map& map, const std::vector<std::int64_t>& points,
                           const Eigen::Isometry3d& T_world_camera, double radius_px,

@@ -3,7 +3,6 @@
 // distance: what cv::BFMatcher(NORM_HAMMING).knnMatch(query, train, matches, 2) returns, without its
 // per-pair call and tracing overhead (a third of a loop scene's run time went there).
 
-#include <climits>
 #include <cstdint>
 #include <stdexcept>
 #include <vector>
@@ -11,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "cge/bow/binary_descriptor.hpp"
+#include "cge/slam/geometry/nearest_two.hpp"
 
 namespace cge {
 namespace slam {
@@ -30,22 +30,11 @@ inline std::vector<std::vector<cv::DMatch>> two_nearest_descriptors(const cv::Ma
   std::vector<std::vector<cv::DMatch>> out(static_cast<std::size_t>(query.rows));
   for (int q = 0; q < query.rows; ++q) {
     const std::uint8_t* a = query.ptr<std::uint8_t>(q);
-    int best = INT_MAX, second = INT_MAX, best_index = -1, second_index = -1;
-    for (int t = 0; t < train.rows; ++t) {
-      const int d = bow::hamming_distance_32_bytes(a, train.ptr<std::uint8_t>(t));
-      if (d < best) {
-        second = best;
-        second_index = best_index;
-        best = d;
-        best_index = t;
-      } else if (d < second) {
-        second = d;
-        second_index = t;
-      }
-    }
+    NearestTwo nearest;
+    for (int t = 0; t < train.rows; ++t) nearest.add(t, bow::hamming_distance_32_bytes(a, train.ptr<std::uint8_t>(t)));
     auto& row = out[static_cast<std::size_t>(q)];
-    if (best_index >= 0) row.emplace_back(q, best_index, static_cast<float>(best));
-    if (second_index >= 0) row.emplace_back(q, second_index, static_cast<float>(second));
+    if (nearest.best_index >= 0) row.emplace_back(q, nearest.best_index, static_cast<float>(nearest.best));
+    if (nearest.second_index >= 0) row.emplace_back(q, nearest.second_index, static_cast<float>(nearest.second));
   }
   return out;
 }
