@@ -72,6 +72,18 @@ TruthMap make_map(int keyframes, int points, std::mt19937& rng, const std::vecto
   return t;
 }
 
+/// One keyframe seeing one keypoint at (u, v) pixels with depth z: a map with nothing to adjust.
+cge::slam::Map one_keyframe_map(float u_px, float v_px, double z_m) {
+  cge::slam::Map map;
+  cge::slam::Keyframe kf;
+  kf.keypoints.emplace_back(u_px, v_px, 31.f);
+  kf.points_camera_m.emplace_back(0, 0, z_m);
+  kf.labels.push_back(cge::FeatureLabel::static_feature);
+  kf.descriptors = cv::Mat::zeros(1, 32, CV_8UC1);
+  map.add_keyframe(kf);
+  return map;
+}
+
 }  // namespace
 
 TEST_CASE("local_bundle_adjustment recovers perturbed poses and points of its window", "[slam]") {
@@ -157,13 +169,7 @@ TEST_CASE("local_bundle_adjustment fixes the outside keyframes that observe most
 }
 
 TEST_CASE("local_bundle_adjustment without a point seen twice does nothing; unknown keyframes throw", "[slam]") {
-  cge::slam::Map map;
-  cge::slam::Keyframe kf;
-  kf.keypoints.emplace_back(100.f, 100.f, 31.f);
-  kf.points_camera_m.emplace_back(0, 0, 2);
-  kf.labels.push_back(cge::FeatureLabel::static_feature);
-  kf.descriptors = cv::Mat::zeros(1, 32, CV_8UC1);
-  map.add_keyframe(kf);
+  cge::slam::Map map = one_keyframe_map(100.f, 100.f, 2);
   const std::int64_t p = map.add_map_point(Eigen::Vector3d(0, 0, 2), cv::Mat::zeros(1, 32, CV_8UC1));
   map.add_observation(p, 0, 0);
   const cge::slam::LocalBundleAdjustmentReport report =
@@ -355,13 +361,7 @@ TEST_CASE("LocalBundleAdjustment round by round: each round lands in the map, th
 }
 
 TEST_CASE("LocalBundleAdjustment with nothing to optimise is done at once", "[slam]") {
-  cge::slam::Map map;
-  cge::slam::Keyframe kf;
-  kf.keypoints.emplace_back(10.f, 10.f, 31.f);
-  kf.points_camera_m.emplace_back(0, 0, 1);
-  kf.labels.push_back(cge::FeatureLabel::static_feature);
-  kf.descriptors = cv::Mat::zeros(1, 32, CV_8UC1);
-  map.add_keyframe(kf);
+  cge::slam::Map map = one_keyframe_map(10.f, 10.f, 1);
   cge::slam::LocalBundleAdjustment adjustment(map, 0, kIntrinsics, cge::slam::LocalMappingSettings{}, 1.2);
   CHECK(adjustment.done());
   CHECK(adjustment.rounds_left() == 0);

@@ -142,7 +142,7 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
 
   // The rounds of the previous keyframe's BA left for this frame, before it is tracked: the
   // frame is tracked in the map as the whole BA leaves it.
-  advance_local_mapping(record);
+  advance_local_mapping(record, settings_.local_mapping.ba_rounds_per_frame);
 
   t = Clock::now();
   TrackResult track = tracker_.track(frame, map_);
@@ -252,7 +252,8 @@ void System::apply_decision(const KeyframeDecision<double>& decision, Frame* cur
 
 int System::insert_keyframe(const Frame& frame, const TrackResult& track, std::size_t record, const char* rule,
                             std::size_t current_record) {
-  flush_local_mapping(records_.back());  // the previous keyframe's BA ends before the map changes
+  // The previous keyframe's BA ends before the map changes.
+  advance_local_mapping(records_.back(), kAllRounds);
   Keyframe kf;
   kf.frame_index = frame.index;
   kf.timestamp_s = frame.timestamp_s;
@@ -319,10 +320,15 @@ void System::keep_relative_to(std::size_t record, int keyframe_id) {
   r.T_reference_camera = map_.keyframe(keyframe_id).T_world_camera.inverse() * r.T_world_camera;
 }
 
+MapMaintenanceSettings System::maintenance_settings() const {
+  MapMaintenanceSettings maintenance = settings_.local_mapping.maintenance;
+  maintenance.close_depth_m = settings_.frame.close_depth_m;  // the frame's close/far rule
+  return maintenance;
+}
+
 void System::local_mapping(int keyframe_id) {
   const LocalMappingSettings& lm = settings_.local_mapping;
-  MapMaintenanceSettings maintenance = lm.maintenance;
-  maintenance.close_depth_m = settings_.frame.close_depth_m;
+  const MapMaintenanceSettings maintenance = maintenance_settings();
   const double scale = settings_.frame.orb.scale_factor;
   if (lm.cull_map_points) cull_recent_map_points(map_, recent_points_, keyframe_id, maintenance);
   if (lm.triangulate_points) {
@@ -335,27 +341,16 @@ void System::local_mapping(int keyframe_id) {
   }
 }
 
-void System::advance_local_mapping(FrameRecord& charged) {
+void System::advance_local_mapping(FrameRecord& charged, int max_rounds) {
   if (local_ba_ == nullptr) return;
   const auto start = Clock::now();
-  const int rounds = settings_.local_mapping.ba_rounds_per_frame;
-  if (rounds >= local_ba_->rounds_left()) {
+  if (max_rounds >= local_ba_->rounds_left()) {
     local_ba_->solve_remaining_rounds(map_);  // one write into the map
   } else {
-    for (int i = 0; i < rounds; ++i) local_ba_->solve_next_round(map_);
+    for (int i = 0; i < max_rounds; ++i) local_ba_->solve_next_round(map_);
   }
   time_of(charged, Stage::local_mapping) += elapsed_ms(start);
   if (!local_ba_->done()) return;
-  const int keyframe_id = local_ba_->keyframe_id();
-  local_ba_.reset();
-  complete_keyframe(keyframe_id, charged);
-}
-
-void System::flush_local_mapping(FrameRecord& charged) {
-  if (local_ba_ == nullptr) return;
-  const auto start = Clock::now();
-  local_ba_->solve_remaining_rounds(map_);
-  time_of(charged, Stage::local_mapping) += elapsed_ms(start);
   const int keyframe_id = local_ba_->keyframe_id();
   local_ba_.reset();
   complete_keyframe(keyframe_id, charged);
@@ -366,7 +361,7 @@ void System::after_keyframe_inserted(int keyframe_id) {
   local_mapping(keyframe_id);
   time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_local);
   if (local_ba_ != nullptr) {
-    advance_local_mapping(records_.back());
+    advance_local_mapping(records_.back(), settings_.local_mapping.ba_rounds_per_frame);
   } else {
     complete_keyframe(keyframe_id, records_.back());
   }
@@ -376,9 +371,7 @@ void System::complete_keyframe(int keyframe_id, FrameRecord& charged) {
   const LocalMappingSettings& lm = settings_.local_mapping;
   if (lm.cull_keyframes) {
     const auto start_cull = Clock::now();
-    MapMaintenanceSettings maintenance = lm.maintenance;
-    maintenance.close_depth_m = settings_.frame.close_depth_m;
-    cull_redundant_keyframes(map_, keyframe_id, maintenance);
+    cull_redundant_keyframes(map_, keyframe_id, maintenance_settings());
     // The tracker's local map is centred on a live keyframe.
     int reference = tracker_.reference_keyframe();
     while (reference >= 0 && map_.keyframe(reference).culled) reference = map_.keyframe(reference).parent;
@@ -519,7 +512,7 @@ void System::finish() {
   const KeyframeDecision<double> decision = keyframe_policy_.flush();
   apply_decision(decision, nullptr, nullptr, 0);
   pending_.clear();
-  if (!records_.empty()) flush_local_mapping(records_.back());
+  if (!records_.empty()) advance_local_mapping(records_.back(), kAllRounds);
 }
 
 Eigen::Isometry3d System::pose_of(const FrameRecord& record) const {

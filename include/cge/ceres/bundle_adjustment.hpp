@@ -250,10 +250,13 @@ inline BundleAdjustmentRun::BundleAdjustmentRun(const BundleAdjustmentSettings& 
   fixed_.assign(n_poses, false);
   for (const int f : fixed_keyframes) fixed_[static_cast<std::size_t>(f)] = true;
   // Observations in the first round: those in front of their camera at the start.
+  std::vector<Eigen::Isometry3d> T_camera_world_start;
+  T_camera_world_start.reserve(n_poses);
+  for (const SE3Block& b : poses_) T_camera_world_start.push_back(b.to_isometry());
   active_.resize(observations_.size());
   for (std::size_t k = 0; k < observations_.size(); ++k) {
     const BundleObservation& o = observations_[k];
-    active_[k] = (poses_[o.keyframe].to_isometry() * points_[o.point]).z() > settings_.min_depth_m;
+    active_[k] = (T_camera_world_start[o.keyframe] * points_[o.point]).z() > settings_.min_depth_m;
   }
   used_pose_.assign(n_poses, false);
   used_point_.assign(points_.size(), false);

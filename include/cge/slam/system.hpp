@@ -14,6 +14,7 @@
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -165,11 +166,13 @@ class System {
   /// Map maintenance around a new keyframe and the start of its local BA (LocalMappingSettings),
   /// timed as local_mapping.
   void local_mapping(int keyframe_id);
-  /// Solves the pending local BA's rounds of a frame (ba_rounds_per_frame); when it is done, the
-  /// keyframe's local mapping ends (complete_keyframe). The time goes to `charged`'s stages.
-  void advance_local_mapping(FrameRecord& charged);
-  /// Solves what is left of the pending local BA (before the map changes, and at the end).
-  void flush_local_mapping(FrameRecord& charged);
+  /// Solves at most `max_rounds` rounds of the pending local BA (ba_rounds_per_frame in a frame,
+  /// kAllRounds before the map changes and at the end); when it is done, the keyframe's local
+  /// mapping ends (complete_keyframe). The time goes to `charged`'s stages.
+  void advance_local_mapping(FrameRecord& charged, int max_rounds);
+  static constexpr int kAllRounds = std::numeric_limits<int>::max();
+  /// LocalMappingSettings::maintenance with the frame's close-depth threshold.
+  MapMaintenanceSettings maintenance_settings() const;
   /// After a keyframe's local BA: redundant keyframes culled, then loop closing and correction.
   void complete_keyframe(int keyframe_id, FrameRecord& charged);
   static constexpr std::size_t kNoRecord = static_cast<std::size_t>(-1);
