@@ -616,6 +616,26 @@ TEST_CASE("selector: semantic change |Num_cur - Num_ref| >= Num_th inserts at on
   require_none(off.step(frame(1, kRef, {P(1, 1), P(2, 2), P(3, 3), P(4, 4)})));
 }
 
+TEST_CASE("selector: a semantic change held for semantic_change_frames frames inserts, a shorter one does not", "[keyframe][rules]") {
+  Settings s = settings42();  // Num_th 2
+  s.semantic_change_frames = 3;
+  Selector sel(s);
+  sel.step(frame(0, kRef, {P(10, 10)}));
+  const std::vector<P> three = {P(10, 10), P(20, 20), P(30, 30)};
+  // Two frames of change, then the count is back: a dropout, no keyframe.
+  REQUIRE(sel.step(frame(1, kRef, three)).measures.semantic_change_frames == 1);
+  require_none(sel.step(frame(2, kRef, three)));
+  REQUIRE(sel.step(frame(3, kRef, {P(10, 10)})).measures.semantic_change_frames == 0);
+  // Three frames of change: the third inserts.
+  require_none(sel.step(frame(4, kRef, three)));
+  require_none(sel.step(frame(5, kRef, three)));
+  const Decision d = sel.step(frame(6, kRef, three));
+  require_insert(d, Rule::semantic_change, 6);
+  REQUIRE(d.measures.semantic_change_frames == 3);
+  // Against the new reference (3 instances) the count starts again.
+  REQUIRE(sel.step(frame(7, kRef, {P(10, 10)})).measures.semantic_change_frames == 1);
+}
+
 TEST_CASE("selector: the tracking guard fires under the floor, first in priority", "[keyframe][rules]") {
   Settings s = settings42();  // floor 50
   Selector sel(s);
@@ -857,6 +877,7 @@ std::vector<OracleStep> oracle_run(const std::vector<RawFrame>& frames, const Se
   OracleFeatures ref = oracle_features(frames[0], g, s.num_dense);
   out[0] = {Rule::first_frame, frames[0].id};
   std::size_t start = 1;
+  int held = 0;  // consecutive frames the semantic change has held against ref
   while (start < n) {
     std::vector<std::pair<double, OracleFeatures>> candidates;  // (D_sum, features), in order
     std::size_t next_start = std::min(start + k, n);
@@ -867,10 +888,12 @@ std::vector<OracleStep> oracle_run(const std::vector<RawFrame>& frames, const Se
       const bool semantic = cur.centroid && ref.centroid;
       const double d_sum = semantic ? s.rho * d_fp + (1 - s.rho) * (*cur.centroid - *ref.centroid).norm() : d_fp;
       const bool candidate = cur.has_features && (!s.use_candidate_test || s_cos < s.cosine_threshold);
+      const bool changed = s.use_semantic_change && std::abs(cur.num - ref.num) >= s.instance_change_threshold;
+      held = changed ? held + 1 : 0;
       Rule immediate = Rule::none;
       if (s.use_tracking_guard && frames[j].tracked < s.tracking_floor) {
         immediate = Rule::tracking_guard;
-      } else if (s.use_semantic_change && std::abs(cur.num - ref.num) >= s.instance_change_threshold) {
+      } else if (changed && held >= s.semantic_change_frames) {
         immediate = Rule::semantic_change;
       } else if (s.use_large_motion && candidate && d_sum > s.motion_threshold_px) {
         immediate = Rule::large_motion;
@@ -878,6 +901,7 @@ std::vector<OracleStep> oracle_run(const std::vector<RawFrame>& frames, const Se
       if (immediate != Rule::none) {
         out[j] = {immediate, cur.id};
         ref = cur;
+        held = 0;
         candidates.clear();
         next_start = j + 1;
         break;
@@ -893,6 +917,7 @@ std::vector<OracleStep> oracle_run(const std::vector<RawFrame>& frames, const Se
       const std::size_t where = next_start == start + k ? start + k - 1 : n;
       out[where] = {Rule::interval_best_candidate, candidates[best].second.id};
       ref = candidates[best].second;
+      held = 0;
     }
     start = next_start;
   }
@@ -939,6 +964,7 @@ TEST_CASE("selector matches an offline reference implementation on random sequen
     s.use_large_motion = seed % 5 != 0;
     s.use_semantic_change = seed % 7 != 0;
     s.use_candidate_test = seed % 11 != 0;
+    s.semantic_change_frames = 1 + static_cast<int>(seed % 3);
     Selector sel(s);
     const std::vector<Decision> got = run(sel, frames);
     const std::vector<OracleStep> expected = oracle_run(frames, s);

@@ -60,6 +60,7 @@ struct KeyframeMeasures {
   int interval_position = 0;         ///< 1..k: this frame's place in the current interval
   int instance_count = 0;            ///< Num_cur
   int reference_instance_count = 0;  ///< Num_ref
+  int semantic_change_frames = 0;  ///< consecutive frames, this one included, the semantic change has held
   // Both policies.
   int tracked_points = 0;            ///< the frame's tracked map points
   int reference_tracked_points = 0;  ///< the reference keyframe's (see set_reference_tracked_points)

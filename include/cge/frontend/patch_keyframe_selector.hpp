@@ -61,6 +61,10 @@ struct PatchKeyframeSettings {
   /// Num_th: |Num_cur - Num_ref| >= this inserts at once, instances, >= 1 (ours: 2, so that a
   /// single missed or spurious detection does not insert a keyframe).
   int instance_change_threshold = 2;
+  /// The semantic change must hold in this many consecutive frames against one reference before it
+  /// inserts, >= 1 (1: at once, as the paper's rule; more rides out detections that drop for a few
+  /// blurred frames and come back).
+  int semantic_change_frames = 1;
   /// Tracking guard floor: fewer tracked map points than this inserts at once (ours, not the
   /// paper's; ORB-SLAM2 declares tracking lost under 30 inliers, so 50 leaves a margin).
   int tracking_floor = 50;
@@ -84,6 +88,7 @@ struct PatchKeyframeSettings {
       fail("motion_threshold_px (D_th) must be finite and non-negative");
     }
     if (instance_change_threshold < 1) fail("instance_change_threshold (Num_th) must be at least 1");
+    if (semantic_change_frames < 1) fail("semantic_change_frames must be at least 1");
     if (tracking_floor < 0) fail("tracking_floor must not be negative");
   }
 };
@@ -155,10 +160,14 @@ class PatchKeyframeSelector {
     m.reference_tracked_points = ref.tracked_points;
     m.frames_since_reference = static_cast<int>(cur.step - ref.step);
 
+    const bool semantic_changed = settings.use_semantic_change &&
+                                  std::abs(cur.instance_count - ref.instance_count) >=
+                                      settings.instance_change_threshold;
+    semantic_change_run_ = semantic_changed ? semantic_change_run_ + 1 : 0;
+    m.semantic_change_frames = semantic_change_run_;
     if (settings.use_tracking_guard && cur.tracked_points < settings.tracking_floor) {
       d.rule = KeyframeRule::tracking_guard;
-    } else if (settings.use_semantic_change &&
-               std::abs(cur.instance_count - ref.instance_count) >= settings.instance_change_threshold) {
+    } else if (semantic_changed && semantic_change_run_ >= settings.semantic_change_frames) {
       d.rule = KeyframeRule::semantic_change;
     } else if (settings.use_large_motion && m.candidate && m.d_sum > settings.motion_threshold_px) {
       d.rule = KeyframeRule::large_motion;
@@ -194,6 +203,7 @@ class PatchKeyframeSelector {
     reference_ = Features{};
     pending_.clear();
     interval_seen_ = 0;
+    semantic_change_run_ = 0;
     steps_ = 0;
     last_id_ = kNoFrame;
   }
@@ -272,6 +282,7 @@ class PatchKeyframeSelector {
     reference_ = f;
     pending_.clear();
     interval_seen_ = 0;
+    semantic_change_run_ = 0;
   }
 
   /// Interval end: insert the best pending candidate, if any, and open a new interval.
@@ -284,6 +295,7 @@ class PatchKeyframeSelector {
       d.rule = KeyframeRule::interval_best_candidate;
       d.keyframe_id = pending_[best].features.id;
       reference_ = pending_[best].features;
+      semantic_change_run_ = 0;
     }
     pending_.clear();
     interval_seen_ = 0;
@@ -293,6 +305,7 @@ class PatchKeyframeSelector {
   Features reference_;
   std::vector<Pending> pending_;
   int interval_seen_ = 0;
+  int semantic_change_run_ = 0;  ///< consecutive frames the semantic change has held against the reference
   std::int64_t steps_ = 0;
   std::int64_t last_id_ = kNoFrame;
 };
