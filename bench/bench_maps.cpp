@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "cge/mapping/semantic_map_builder.hpp"
-#include "cge/mapping/voxel_filter.hpp"
+#include "cge/voxels/voxel_filter.hpp"
 #include "cge/sim/presets.hpp"
 #include "cge/sim/renderer.hpp"
 

@@ -15,7 +15,7 @@
 #include <Eigen/Core>
 
 #include "cge/core/mask.hpp"
-#include "cge/frontend/depth_image.hpp"
+#include "cge/core/depth_image.hpp"
 #include "cge/frontend/depth_mad_filter.hpp"
 #include "cge/frontend/feature_label.hpp"
 #include "cge/frontend/pixel_box.hpp"

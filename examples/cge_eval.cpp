@@ -47,7 +47,7 @@
 #ifdef CGE_EVAL_HAS_MAPS
 #include "cge/mapping/ghost_voxels.hpp"
 #include "cge/mapping/map_image.hpp"
-#include "cge/mapping/semantic_integrity.hpp"
+#include "cge/voxels/semantic_integrity.hpp"
 #include "cge/octomap/semantic_octree.hpp"
 #endif
 

@@ -24,7 +24,8 @@
 // two nodes, H ~ 0 and the information index I = log2|V| - H ~ log2|V| (docs/METHOD.md section 4).
 // A frame is `collapsed` when |I - log2|V|| = H <= T bits (lambda = 1, the default): H <= 1 bit
 // means the distribution's perplexity 2^H is at most 2, i.e. effectively one or two nodes.
-// Same inputs, same bytes. Exit codes: 0 success, 1 failure while writing, 2 bad usage or input.
+// --out is filled all or nothing, as cge_slam's (cge/run/output_folder.hpp): a failed run leaves it
+// as it was. Same inputs, same bytes. Exit codes: 0 success, 1 failure while writing, 2 bad usage or input.
 
 #include <algorithm>
 #include <chrono>
@@ -32,7 +33,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -46,11 +46,12 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "cge/dataset/orbslam2_settings.hpp"
 #include "cge/dataset/tum_sequence.hpp"
 #include "cge/entropy/shortest_path_degree_sums.hpp"
 #include "cge/metrics/binary_classifier.hpp"
 #include "cge/metrics/ground_truth_loops_io.hpp"
+#include "cge/run/output_folder.hpp"
+#include "cge/run/run_settings.hpp"
 #include "cge/segmentation/precomputed_mask_reader.hpp"
 #include "cge/slam/frame.hpp"
 #include "cge/slam/keyframe.hpp"
@@ -89,13 +90,6 @@ struct Options {
   std::uint64_t seed = 0;              ///< seed of the MAD samples, as cge_slam
   std::string ties = "all";            ///< TieMode of the degree sums: all, mean or min
 };
-
-cge::TieMode parse_ties(const std::string& name) {
-  if (name == "all") return cge::TieMode::all;
-  if (name == "mean") return cge::TieMode::mean;
-  if (name == "min") return cge::TieMode::min;
-  throw UsageError("--ties: '" + name + "' is not all, mean or min");
-}
 
 /// One studied frame: its graph's size and entropies under both scalings (computed once).
 struct StudiedFrame {
@@ -142,45 +136,6 @@ void check_options(const Options& opt) {
   }
 }
 
-/// Refuses a path that is not a folder, or a non-empty folder without --force (checked before the
-/// work; the folder is created only when the results are written).
-void check_output_folder(const fs::path& out, bool force) {
-  std::error_code ec;
-  if (!fs::exists(out, ec)) return;
-  if (!fs::is_directory(out, ec)) throw UsageError("'" + out.string() + "' exists and is not a folder");
-  if (!fs::is_empty(out, ec) && !force) {
-    throw UsageError("'" + out.string() + "' exists and is not empty (use --force to replace " + kProgram +
-                     "'s files in it)");
-  }
-}
-
-void create_output_folder(const fs::path& out) {
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) throw std::runtime_error("cannot create '" + out.string() + "': " + ec.message());
-}
-
-/// Writes `name` in `out` through a temporary file renamed into place (no half-written file).
-template <typename Writer>
-void write_file(const fs::path& out, const std::string& name, Writer&& writer) {
-  const fs::path final_path = out / name;
-  const fs::path partial = out / ("." + name + ".partial." + std::to_string(::getpid()));
-  {
-    std::ofstream file(partial, std::ios::binary);
-    if (!file) throw std::runtime_error("cannot write " + partial.string());
-    writer(file);
-    file.flush();
-    if (!file) {
-      std::error_code ec;
-      fs::remove(partial, ec);
-      throw std::runtime_error("cannot write " + partial.string());
-    }
-  }
-  std::error_code ec;
-  fs::rename(partial, final_path, ec);
-  if (ec) throw std::runtime_error("cannot move " + partial.string() + " to " + final_path.string());
-}
-
 double area_or_nan(const std::vector<cge::metrics::LabelledScore>& examples, bool average_precision) {
   bool pos = false, neg = false;
   for (const auto& e : examples) (e.positive ? pos : neg) = true;
@@ -191,11 +146,7 @@ double area_or_nan(const std::vector<cge::metrics::LabelledScore>& examples, boo
 int run(const Options& opt) {
   check_options(opt);
   cge::slam::SystemSettings settings;
-  try {
-    settings.mode = cge::slam::parse_dynamic_mode(opt.mode);
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(std::string("--mode: ") + e.what());
-  }
+  settings.mode = cge::run::parse_mode_option(opt.mode);
   settings.seed = opt.seed;
 
   // ---- the dataset ----------------------------------------------------------------------------
@@ -203,13 +154,8 @@ int run(const Options& opt) {
   if (!fs::is_directory(dataset)) throw UsageError("--dataset: '" + opt.dataset + "' is not a folder");
   const cge::dataset::TumSequence sequence(dataset);
   if (!sequence.camera_settings_file()) throw UsageError("'" + opt.dataset + "' has no camera.yaml");
-  const cge::dataset::OrbSlam2Settings camera = cge::dataset::read_orbslam2_settings(*sequence.camera_settings_file());
-  settings.frame.depth_units_per_metre = camera.depth_map_factor;
-  settings.frame.orb.features = camera.orb.features;
-  settings.frame.orb.scale_factor = camera.orb.scale_factor;
-  settings.frame.orb.levels = camera.orb.levels;
-  settings.frame.orb.initial_fast_threshold = camera.orb.initial_fast_threshold;
-  settings.frame.orb.min_fast_threshold = camera.orb.min_fast_threshold;
+  cge::PinholeIntrinsics<double> intrinsics;
+  cge::run::apply_settings_file(*sequence.camera_settings_file(), intrinsics, settings);
   try {
     settings.validate();
   } catch (const std::invalid_argument& e) {
@@ -235,12 +181,11 @@ int run(const Options& opt) {
     }
     revisits.emplace(l.query_index, l.match_index);
   }
-  check_output_folder(opt.out, opt.force);
 
   // ---- per frame: the LoopCloser's graph and both entropies (each frame once) ------------------
   cge::slam::LoopCloserSettings raw_settings;
   raw_settings.degree_entropy.alpha = opt.alpha;
-  raw_settings.degree_entropy.ties = parse_ties(opt.ties);
+  raw_settings.degree_entropy.ties = cge::run::parse_tie_mode("--ties", opt.ties);
   raw_settings.exponent_scaling = cge::ScalingKind::raw;
   cge::slam::LoopCloserSettings normalised_settings = raw_settings;
   normalised_settings.exponent_scaling = cge::ScalingKind::normalised_mean;
@@ -248,7 +193,8 @@ int run(const Options& opt) {
   const cge::CGESimilarity<double> normalised_similarity = cge::slam::loop_similarity(normalised_settings);
   const double lambda = raw_settings.degree_entropy.lambda;
 
-  cge::slam::FrameMaker maker(settings, camera.camera);
+  cge::run::OutputFolder out(opt.out, opt.force, kProgram, {kFramesFile, kPairsFile, kSummaryFile});
+  cge::slam::FrameMaker maker(settings, intrinsics);
   const auto start = std::chrono::steady_clock::now();
   const bool progress = ::isatty(::fileno(stderr)) != 0;
   std::vector<StudiedFrame> frames;
@@ -344,8 +290,7 @@ int run(const Options& opt) {
   }
 
   // ---- output ----------------------------------------------------------------------------------
-  create_output_folder(opt.out);
-  write_file(opt.out, kFramesFile, [&](std::ostream& f) {
+  out.write(kFramesFile, [&](std::ostream& f) {
     f << "frame,timestamp,vertices,edges,entropy_raw_bits,entropy_normalised_bits,log2_vertices,collapsed_raw,"
          "collapsed_normalised\n";
     char stamp[40];
@@ -356,7 +301,7 @@ int run(const Options& opt) {
         << int(s.collapsed_normalised) << '\n';
     }
   });
-  write_file(opt.out, kPairsFile, [&](std::ostream& f) {
+  out.write(kPairsFile, [&](std::ostream& f) {
     f << "query,match,revisit,s_sum_raw,s_sum_normalised\n";
     for (const StudiedPair& p : pairs) {
       f << p.query << ',' << p.match << ',' << int(p.revisit) << ',' << exact(p.s_sum_raw) << ','
@@ -380,7 +325,8 @@ int run(const Options& opt) {
   summary["auc_normalised"] = number(auc_normalised);
   summary["average_precision_raw"] = number(ap_raw);
   summary["average_precision_normalised"] = number(ap_normalised);
-  write_file(opt.out, kSummaryFile, [&](std::ostream& f) { f << summary.dump(2) << '\n'; });
+  out.write(kSummaryFile, [&](std::ostream& f) { f << summary.dump(2) << '\n'; });
+  out.commit();
 
   const auto print_line = [](const char* name, double value) { std::printf("%s %.12g\n", name, value); };
   print_line("frames", static_cast<double>(frames.size()));

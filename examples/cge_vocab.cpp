@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -146,8 +145,7 @@ int run(const Options& opt) {
     source = opt.images_dir.empty() ? opt.list_file : opt.images_dir;
   }
 
-  std::mt19937_64 engine(opt.training.seed);
-  const cge::bow::Vocabulary v = cge::bow::Vocabulary::train(documents, opt.training.vocabulary, engine);
+  const cge::bow::Vocabulary v = cge::slam::train_vocabulary_from_descriptors(documents, opt.training);
   cge_tool::CreatedFolders folders;
   folders.create_parent_of(opt.out, "--out");
   cge_tool::replace_file_with_stream(opt.out, [&v](std::ostream& f) { v.save(f); });

@@ -18,6 +18,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "cge/io/created_folders.hpp"
+
 namespace cge_tool {
 
 /// Exit codes of the tools: success; a failure while running (e.g. a file that cannot be
@@ -117,52 +119,8 @@ inline void require_at_most(const char* option, double value, double limit, cons
   throw UsageError(text);
 }
 
-/// The one rule of the tools for output locations (docs/CLI.md, "Output files and folders"):
-/// missing folders on the way to an output are created, as `mkdir -p` does, and removed again
-/// (those still empty) when the run fails before its outputs are in place; a part of the path that
-/// exists and is not a folder is a usage error.
-class CreatedFolders {
- public:
-  CreatedFolders() = default;
-  CreatedFolders(const CreatedFolders&) = delete;
-  CreatedFolders& operator=(const CreatedFolders&) = delete;
-  ~CreatedFolders() {
-    for (auto it = created_.rbegin(); it != created_.rend(); ++it) {
-      std::error_code ec;
-      if (std::filesystem::is_empty(*it, ec) && !ec) std::filesystem::remove(*it, ec);
-    }
-  }
-
-  /// Creates `folder` and its missing parents; `what` names the option in messages.
-  void create(const std::filesystem::path& folder, const std::string& what) {
-    namespace fs = std::filesystem;
-    if (folder.empty()) return;
-    std::vector<fs::path> missing;
-    std::error_code ec;
-    for (fs::path p = folder; !p.empty(); p = p.parent_path()) {
-      const fs::file_status st = fs::status(p, ec);
-      if (fs::is_directory(st)) break;
-      if (fs::exists(st)) throw UsageError(what + ": '" + p.string() + "' exists and is not a folder");
-      missing.push_back(p);
-      if (p == p.parent_path()) break;
-    }
-    for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
-      if (!fs::create_directory(*it, ec) && ec) {
-        throw std::runtime_error(what + ": cannot create the folder '" + it->string() + "': " + ec.message());
-      }
-      created_.push_back(*it);
-    }
-  }
-  /// Creates the folder that `file` goes into.
-  void create_parent_of(const std::filesystem::path& file, const std::string& what) {
-    create(file.parent_path(), what);
-  }
-  /// The outputs are in place: the folders stay.
-  void keep() { created_.clear(); }
-
- private:
-  std::vector<std::filesystem::path> created_;
-};
+/// Missing folders on the way to an output: created, and removed again when the run fails.
+using CreatedFolders = cge::io::CreatedFolders;
 
 /// Checks an output file's name before the work: a folder there is refused as a folder, an
 /// existing file unless `force` (UsageError naming `what`, e.g. "--out").

@@ -14,7 +14,7 @@
 #include "cge/core/mask.hpp"
 #include "cge/core/nearest_pixel.hpp"
 #include "cge/core/uniform_double.hpp"
-#include "cge/frontend/depth_image.hpp"
+#include "cge/core/depth_image.hpp"
 #include "cge/frontend/depth_mad_filter.hpp"
 #include "cge/frontend/feature_label.hpp"
 #include "cge/frontend/pixel_box.hpp"

@@ -4,6 +4,7 @@
 
 #include "cge/core/bits.hpp"
 #include "cge/core/concepts.hpp"
+#include "cge/core/depth_image.hpp"
 #include "cge/core/image_region.hpp"
 #include "cge/core/mask.hpp"
 #include "cge/core/point_traits.hpp"
@@ -17,7 +18,6 @@
 #include "cge/entropy/shannon_edge_entropy.hpp"
 #include "cge/entropy/shortest_path_degree_sums.hpp"
 #include "cge/entropy/softmax_entropy.hpp"
-#include "cge/frontend/depth_image.hpp"
 #include "cge/frontend/depth_mad_filter.hpp"
 #include "cge/frontend/feature_label.hpp"
 #include "cge/frontend/frame_summary.hpp"

@@ -13,7 +13,7 @@
 
 #include "cge/dataset/orbslam2_settings.hpp"
 #include "cge/dataset/tum_sequence.hpp"
-#include "cge/mapping/semantic_integrity.hpp"
+#include "cge/voxels/semantic_integrity.hpp"
 
 namespace cge {
 namespace mapping {

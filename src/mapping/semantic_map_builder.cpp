@@ -6,8 +6,8 @@
 #include <map>
 #include <stdexcept>
 
-#include "cge/mapping/ply_writer.hpp"
-#include "cge/mapping/voxel_filter.hpp"
+#include "cge/voxels/ply_writer.hpp"
+#include "cge/voxels/voxel_filter.hpp"
 
 namespace cge {
 namespace mapping {

@@ -57,7 +57,8 @@ System::System(const SystemSettings& settings, const PinholeIntrinsics<double>& 
       segmenter_(std::move(segmenter)),
       frame_maker_(settings, intrinsics),
       tracker_(settings.tracker, intrinsics, settings.frame.orb.scale_factor),
-      keyframe_policy_(keyframe_policy_of(settings.mode), settings.patch_keyframes, settings.orbslam2_keyframes) {}
+      keyframe_policy_(keyframe_policy_of(settings.mode), settings.patch_keyframes, settings.orbslam2_keyframes),
+      loop_correction_(settings.loop_correction, intrinsics, settings.frame.orb.scale_factor) {}
 
 System::~System() = default;
 System::System(System&&) noexcept = default;
@@ -403,109 +404,12 @@ void System::complete_keyframe(int keyframe_id, FrameRecord& charged) {
   time_of(charged, Stage::loop_closing) += elapsed_ms(start);
 
   if (!d.accepted || !settings_.loop_correction.enabled) return;
-  loop_edges_.push_back(LoopEdge{d.match_keyframe, keyframe_id, d.T_match_query});
-  if (last_correction_keyframe_ >= 0 &&
-      keyframe_id - last_correction_keyframe_ <= settings_.loop_correction.min_keyframes_between) {
-    return;
-  }
+  loop_correction_.add_loop(LoopEdge{d.match_keyframe, keyframe_id, d.T_match_query});
+  if (!loop_correction_.due(keyframe_id)) return;  // its edge joins the next correction
   const auto start_optimisation = Clock::now();
-  correct_loop(keyframe_id);
-  last_correction_keyframe_ = keyframe_id;
-  ++corrections_;
+  const LoopCorrectionReport corrected = loop_correction_.correct(map_, keyframe_id);
+  tracker_.apply_map_correction(corrected.T_corrected_old);
   time_of(charged, Stage::optimisation) += elapsed_ms(start_optimisation);
-}
-
-void System::correct_loop(int query_keyframe) {
-  const LoopCorrectionSettings& lc = settings_.loop_correction;
-  // The optimisation runs over the live keyframes (node i is keyframe live[i]); culled ones follow
-  // their parents (Map::set_keyframe_pose moves them).
-  std::vector<int> live;
-  std::vector<int> node_of(static_cast<std::size_t>(map_.keyframe_count()), -1);
-  for (int k = 0; k < map_.keyframe_count(); ++k) {
-    if (map_.keyframe(k).culled) continue;
-    node_of[static_cast<std::size_t>(k)] = static_cast<int>(live.size());
-    live.push_back(k);
-  }
-  const auto node = [&](int k) { return node_of[static_cast<std::size_t>(k)]; };
-  std::vector<Eigen::Isometry3d> before;
-  for (const int k : live) before.push_back(map_.keyframe(k).T_world_camera);
-  const auto pose = [&](int k) { return map_.keyframe(k).T_world_camera; };
-  /// A keyframe's nearest live ancestor (itself when live).
-  const auto live_ancestor = [&](int k) {
-    while (map_.keyframe(k).culled) k = map_.keyframe(k).parent;
-    return k;
-  };
-
-  // Pose graph: relative poses as currently estimated (consecutive live keyframes, covisibility),
-  // plus the measured loop edges; keyframe 0 fixes the gauge.
-  std::vector<PoseGraphEdge> edges;
-  const auto add_edge = [&](int a, int b, const Eigen::Isometry3d& T_a_b) {
-    edges.push_back(PoseGraphEdge::weighted(node(a), node(b), T_a_b, lc.rotation_weight, lc.translation_weight));
-  };
-  for (std::size_t i = 1; i < live.size(); ++i) add_edge(live[i - 1], live[i], pose(live[i - 1]).inverse() * pose(live[i]));
-  for (const int a : live) {
-    for (int b : map_.covisible_keyframes(a, -1)) {  // most shared points first
-      if (map_.shared_points(a, b) < lc.covisibility_min_shared_points) break;
-      if (b > a && node(b) != node(a) + 1) add_edge(a, b, pose(a).inverse() * pose(b));
-    }
-  }
-  for (const LoopEdge& e : loop_edges_) {
-    // An end culled since: the edge moves to its live ancestor, through the current relative pose.
-    const int match = live_ancestor(e.match), query = live_ancestor(e.query);
-    if (match == e.match && query == e.query) {
-      add_edge(match, query, e.T_match_query);
-    } else {
-      add_edge(match, query,
-               pose(match).inverse() * pose(e.match) * e.T_match_query * pose(e.query).inverse() * pose(query));
-    }
-  }
-  const PoseGraphResult graph = PoseGraphOptimiser{lc.pose_graph}.optimise(before, edges, {0});
-
-  // A point moves rigidly with its first keyframe, from pose `from` to pose `to` (node-indexed).
-  const auto move_with_first_keyframe = [&](const MapPoint& p, const std::vector<Eigen::Isometry3d>& from,
-                                            const std::vector<Eigen::Isometry3d>& to) {
-    const auto i = static_cast<std::size_t>(node(p.observations.front().keyframe_id));
-    map_.set_map_point_position(p.id, to[i] * (from[i].inverse() * p.position_world));
-  };
-  // Map points follow their first keyframe's correction (bad points have no observations).
-  for (const MapPoint& p : map_.map_points()) {
-    if (!p.observations.empty()) move_with_first_keyframe(p, before, graph.T_world_camera);
-  }
-  for (std::size_t i = 0; i < live.size(); ++i) map_.set_keyframe_pose(live[i], graph.T_world_camera[i]);
-
-  if (lc.bundle_adjustment) {
-    // Global BA over every point seen by at least two keyframes; pixel + depth observations.
-    std::vector<Eigen::Vector3d> points;
-    std::vector<std::int64_t> point_ids;
-    std::vector<BundleObservation> observations;
-    for (const MapPoint& p : map_.map_points()) {
-      if (p.observations.size() < 2) continue;
-      const int index = static_cast<int>(points.size());
-      points.push_back(p.position_world);
-      point_ids.push_back(p.id);
-      for (const Observation& o : p.observations) {
-        observations.push_back(keyframe_bundle_observation(map_.keyframe(o.keyframe_id), o.keypoint_index,
-                                                           node(o.keyframe_id), index,
-                                                           settings_.frame.orb.scale_factor, lc.depth_sigma_per_m));
-      }
-    }
-    if (!points.empty()) {
-      const BundleAdjustmentResult ba =
-          BundleAdjuster{lc.bundle}.adjust(intrinsics_, graph.T_world_camera, points, observations, {0});
-      // A point seen by one keyframe took no part: it follows that keyframe's move in the BA, as
-      // in ORB-SLAM2, or it would sit where the pose graph put it, off its own keyframe's new
-      // pose (the newest keyframes, whose points mostly have one observation, moved most).
-      for (const MapPoint& p : map_.map_points()) {
-        if (p.observations.size() == 1) move_with_first_keyframe(p, graph.T_world_camera, ba.T_world_camera);
-      }
-      for (std::size_t i = 0; i < live.size(); ++i) map_.set_keyframe_pose(live[i], ba.T_world_camera[i]);
-      for (std::size_t i = 0; i < point_ids.size(); ++i)
-        map_.set_map_point_position(point_ids[i], ba.points_world_m[i]);
-    }
-  }
-  const int q = live_ancestor(query_keyframe);
-  tracker_.apply_map_correction(map_.keyframe(q).T_world_camera *
-                                before[static_cast<std::size_t>(node(q))].inverse());
 }
 
 void System::finish() {

@@ -31,6 +31,12 @@ std::vector<bow::BinaryDescriptor> orb_descriptors(const cv::Mat& image, int fea
   return opencv::to_binary_descriptors(descriptors);
 }
 
+bow::Vocabulary train_vocabulary_from_descriptors(const std::vector<std::vector<bow::BinaryDescriptor>>& documents,
+                                                  const VocabularyTrainingSettings& settings) {
+  std::mt19937_64 engine(settings.seed);
+  return bow::Vocabulary::train(documents, settings.vocabulary, engine);
+}
+
 bow::Vocabulary train_vocabulary(const std::vector<cv::Mat>& images, const VocabularyTrainingSettings& settings) {
   if (images.empty()) throw std::invalid_argument("train_vocabulary: no images");
   settings.vocabulary.validate();
@@ -43,12 +49,11 @@ bow::Vocabulary train_vocabulary(const std::vector<cv::Mat>& images, const Vocab
       throw std::invalid_argument("train_vocabulary: image " + std::to_string(i) + ": " + e.what());
     }
   }
-  std::mt19937_64 engine(settings.seed);
-  return bow::Vocabulary::train(documents, settings.vocabulary, engine);
+  return train_vocabulary_from_descriptors(documents, settings);
 }
 
 bow::Vocabulary train_vocabulary(const sim::FrameSource& source, int first_frames,
-                                 const VocabularyTrainingSettings& settings) {
+                                                  const VocabularyTrainingSettings& settings) {
   if (settings.frame_step < 1) throw std::invalid_argument("train_vocabulary: frame_step must be at least 1");
   if (first_frames < 1 || first_frames > source.frame_count()) {
     throw std::invalid_argument("train_vocabulary: first_frames " + std::to_string(first_frames) + " is not in 1 .. " +

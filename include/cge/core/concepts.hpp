@@ -20,7 +20,7 @@
 
 #include "cge/core/mask.hpp"
 #include "cge/core/point_traits.hpp"
-#include "cge/frontend/depth_image.hpp"
+#include "cge/core/depth_image.hpp"
 
 namespace cge {
 
@@ -40,7 +40,7 @@ concept MaskLike = requires(const M& m, int col, int row) {
   { traits::Mask<M>::empty(m) } -> std::convertible_to<bool>;
 };
 
-/// A depth image type adapted by cge::traits::DepthImage (see cge/frontend/depth_image.hpp).
+/// A depth image type adapted by cge::traits::DepthImage (see cge/core/depth_image.hpp).
 template <typename D>
 concept DepthImageLike = requires(const D& d, int col, int row) {
   { traits::DepthImage<D>::width(d) } -> std::convertible_to<int>;

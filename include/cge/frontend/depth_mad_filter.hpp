@@ -36,7 +36,7 @@
 #include "cge/core/nearest_pixel.hpp"
 #include "cge/core/point_traits.hpp"
 #include "cge/core/uniform_double.hpp"
-#include "cge/frontend/depth_image.hpp"
+#include "cge/core/depth_image.hpp"
 #include "cge/frontend/feature_label.hpp"
 #include "cge/frontend/pixel_box.hpp"
 
@@ -243,7 +243,7 @@ class DepthMADFilter {
     static_assert(Point2Like<std::decay_t<decltype(*std::begin(keypoints))>>,
                   "keypoints must be a range of points adapted by cge::traits::Point2 (cge/core/point_traits.hpp)");
     static_assert(DepthImageLike<Depth>,
-                  "depth must be adapted by cge::traits::DepthImage (cge/frontend/depth_image.hpp)");
+                  "depth must be adapted by cge::traits::DepthImage (cge/core/depth_image.hpp)");
     static_assert(MaskLike<Mask>, "masks must be adapted by cge::traits::Mask (cge/core/mask.hpp)");
 #endif
     using DepthTraits = traits::DepthImage<Depth>;

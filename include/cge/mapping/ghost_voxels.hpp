@@ -24,9 +24,9 @@
 
 #include <Eigen/Geometry>
 
-#include "cge/mapping/map_voxel.hpp"
-#include "cge/mapping/semantic_integrity.hpp"
-#include "cge/mapping/semantic_point.hpp"
+#include "cge/voxels/map_voxel.hpp"
+#include "cge/voxels/semantic_integrity.hpp"
+#include "cge/voxels/semantic_point.hpp"
 #include "cge/metrics/trajectory.hpp"
 
 namespace cge {

@@ -10,8 +10,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "cge/mapping/map_voxel.hpp"
-#include "cge/mapping/semantic_point.hpp"
+#include "cge/voxels/map_voxel.hpp"
+#include "cge/voxels/semantic_point.hpp"
 
 namespace cge {
 namespace mapping {

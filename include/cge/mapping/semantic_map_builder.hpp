@@ -23,9 +23,9 @@
 #include "cge/core/lens_distortion.hpp"
 #include "cge/core/pinhole_intrinsics.hpp"
 #include "cge/mapping/map_dynamic_region.hpp"
-#include "cge/mapping/map_voxel.hpp"
-#include "cge/mapping/semantic_integrity.hpp"
-#include "cge/mapping/semantic_point.hpp"
+#include "cge/voxels/map_voxel.hpp"
+#include "cge/voxels/semantic_integrity.hpp"
+#include "cge/voxels/semantic_point.hpp"
 #include "cge/octomap/semantic_octree.hpp"
 #include "cge/slam/keyframe.hpp"
 

@@ -36,8 +36,8 @@
 #include <octomap/OcTree.h>
 #include <Eigen/Core>
 
-#include "cge/mapping/class_palette.hpp"
-#include "cge/mapping/map_voxel.hpp"
+#include "cge/voxels/class_palette.hpp"
+#include "cge/voxels/map_voxel.hpp"
 
 namespace cge {
 namespace octomap_adapter {

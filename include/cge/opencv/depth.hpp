@@ -1,5 +1,5 @@
 #pragma once
-// cv::Mat depth images as cge depth images (cge/frontend/depth_image.hpp).
+// cv::Mat depth images as cge depth images (cge/core/depth_image.hpp).
 //
 // DepthView wraps a single-channel cv::Mat without copying its pixels:
 // - CV_16UC1 with a scale in units per metre (TUM RGB-D and the synthetic sequences: 5000, Kinect
@@ -15,7 +15,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "cge/frontend/depth_image.hpp"
+#include "cge/core/depth_image.hpp"
 
 namespace cge {
 namespace opencv {

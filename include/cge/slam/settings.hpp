@@ -207,24 +207,44 @@ struct LocalMappingSettings {
   }();
 };
 
-/// Correction of an accepted loop (docs/METHOD.md section 7.5): a pose graph over all keyframes
-/// (sequential, covisibility and every accepted loop edge), map points moved with their first
-/// keyframe, then global bundle adjustment.
+/// Correction of an accepted loop (docs/METHOD.md section 7, step 5; cge/slam/loop_correction.hpp):
+/// a pose graph over all keyframes (sequential, covisibility and every accepted loop edge), map
+/// points moved with their first keyframe, then global bundle adjustment.
 struct LoopCorrectionSettings {
   bool enabled = true;  ///< false: loops are only detected and logged (loops.csv), never corrected
   /// After a correction, accepted loops within this many keyframes only add their edge to the
-  /// graph (one revisit is accepted at many consecutive keyframes), keyframes, >= 0.
+  /// graph (one revisit is accepted at many consecutive keyframes), keyframes, >= 0. 10 as the
+  /// gap ORB-SLAM2 keeps after a loop (LoopClosing.cc, DetectLoop: there it skips detection,
+  /// here only the correction).
   int min_keyframes_between = 10;
-  /// Covisibility edges join keyframes sharing at least this many map points (ORB-SLAM2's
-  /// essential graph: 100), points, >= 1.
+  /// Covisibility edges join keyframes sharing at least this many map points, points, >= 1
+  /// (ORB-SLAM2 Optimizer.cc, OptimizeEssentialGraph: minFeat 100).
   int covisibility_min_shared_points = 100;
-  double rotation_weight = 1e4;     ///< pose-graph edge information on rotation, 1/rad^2, > 0
-  double translation_weight = 1e4;  ///< pose-graph edge information on translation, 1/m^2, > 0
-  bool bundle_adjustment = true;    ///< global BA after the pose graph
-  /// Depth standard deviation in BA: sigma_z = depth_sigma_per_m * z^2 (Kinect-like growth), 1/m, > 0.
+  /// Pose-graph edge information, the same on every edge (ORB-SLAM2's essential graph uses one
+  /// information matrix for all edges too); ours: without a robust loss only the ratio of the two
+  /// shapes the optimum.
+  double rotation_weight = 1e4;     ///< 1/rad^2, > 0
+  double translation_weight = 1e4;  ///< 1/m^2, > 0
+  bool bundle_adjustment = true;    ///< global BA after the pose graph (ORB-SLAM2 runs one after a loop)
+  /// Depth standard deviation in BA: sigma_z = depth_sigma_per_m * z^2 (Kinect-like growth), 1/m,
+  /// > 0; ours, as TrackerSettings::refinement_depth_sigma_per_m (an ORB-SLAM2 settings file sets
+  /// it, cge/slam/settings_from_orbslam2.hpp).
   double depth_sigma_per_m = 0.003;
   PoseGraphSettings pose_graph;
   BundleAdjustmentSettings bundle;
+
+  /// Throws std::invalid_argument naming the bad field.
+  void validate() const {
+    const auto fail = [](const std::string& what) {
+      throw std::invalid_argument("LoopCorrectionSettings: " + what);
+    };
+    if (min_keyframes_between < 0) fail("min_keyframes_between must not be negative");
+    if (covisibility_min_shared_points < 1) fail("covisibility_min_shared_points must be at least 1");
+    if (!(rotation_weight > 0 && translation_weight > 0)) fail("rotation_weight and translation_weight must be > 0");
+    if (!(depth_sigma_per_m > 0)) fail("depth_sigma_per_m must be > 0");
+    pose_graph.validate();
+    bundle.validate();
+  }
 };
 
 /// Everything the System needs. Validate with validate(); throws std::invalid_argument naming a field.
@@ -290,13 +310,7 @@ struct SystemSettings {
     if (!(local_mapping.depth_sigma_per_m > 0)) fail("local_mapping.depth_sigma_per_m must be > 0");
     local_mapping.bundle.validate();
     local_mapping.maintenance.validate();
-    const LoopCorrectionSettings& lc = loop_correction;
-    if (lc.min_keyframes_between < 0) fail("loop_correction.min_keyframes_between must not be negative");
-    if (lc.covisibility_min_shared_points < 1)
-      fail("loop_correction.covisibility_min_shared_points must be at least 1");
-    if (!(lc.rotation_weight > 0 && lc.translation_weight > 0)) fail("loop_correction weights must be > 0");
-    if (!(lc.depth_sigma_per_m > 0)) fail("loop_correction.depth_sigma_per_m must be > 0");
-    lc.bundle.validate();
+    loop_correction.validate();
     patch_keyframes.validate();
     orbslam2_keyframes.validate();
   }

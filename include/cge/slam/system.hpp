@@ -27,6 +27,7 @@
 #include "cge/frontend/keyframe_policy.hpp"
 #include "cge/segmentation/instance_segmenter.hpp"
 #include "cge/slam/frame.hpp"
+#include "cge/slam/loop_correction.hpp"
 #include "cge/slam/map.hpp"
 #include "cge/slam/settings.hpp"
 #include "cge/slam/tracker.hpp"
@@ -120,7 +121,7 @@ class System {
 
   /// Enables loop closing (section 7): after each keyframe insertion the closer processes the new
   /// keyframe and its decision becomes a LoopRecord. With settings.loop_correction enabled an
-  /// accepted loop is corrected at once (correct_loop: pose graph, then global BA), unless the last
+  /// accepted loop is corrected at once (LoopCorrection: pose graph, then global BA), unless the last
   /// correction is at most loop_correction.min_keyframes_between keyframes old; its loop edge then
   /// joins the next correction. Set it before the first frame.
   void set_loop_closer(std::unique_ptr<LoopCloser> loop_closer);
@@ -139,7 +140,7 @@ class System {
   const Map& map() const { return map_; }
   const std::vector<LoopRecord>& loops() const { return loops_; }
   /// Loop corrections applied (pose graph + bundle adjustment runs).
-  int loop_corrections() const { return corrections_; }
+  int loop_corrections() const { return loop_correction_.corrections(); }
   /// The current pose estimate of a frame: its reference keyframe's current pose times the
   /// relative pose at tracking time (so optimisation of keyframes moves the whole trajectory).
   /// The relative pose is taken against the keyframe's pose as the tracker saw it, before the
@@ -178,9 +179,6 @@ class System {
   static constexpr std::size_t kNoRecord = static_cast<std::size_t>(-1);
   /// Keeps record's pose relative to keyframe_id's pose as it is now (see pose_of).
   void keep_relative_to(std::size_t record, int keyframe_id);
-  /// Pose graph over all keyframes (with every accepted loop edge so far), map points moved with
-  /// their first keyframe, then global BA (settings.loop_correction).
-  void correct_loop(int query_keyframe);
 
   SystemSettings settings_;
   PinholeIntrinsics<double> intrinsics_;
@@ -194,13 +192,7 @@ class System {
   std::deque<Pending> pending_;
   std::unique_ptr<LoopCloser> loop_closer_;
   std::unique_ptr<LocalBundleAdjustment> local_ba_;  ///< the local BA under way, null: none
-  struct LoopEdge {
-    int match = -1, query = -1;
-    Eigen::Isometry3d T_match_query = Eigen::Isometry3d::Identity();
-  };
-  std::vector<LoopEdge> loop_edges_;  ///< every accepted loop, for all later pose graphs
-  int last_correction_keyframe_ = -1;
-  int corrections_ = 0;
+  LoopCorrection loop_correction_;  ///< every accepted loop's edge, and the corrections
   /// Map points made by the last keyframes, not yet judged by map-point culling (ascending id).
   std::vector<std::int64_t> recent_points_;
   cv::Size image_size_;  ///< of the frames processed (projections into keyframes)

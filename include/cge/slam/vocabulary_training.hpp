@@ -27,6 +27,12 @@ struct VocabularyTrainingSettings {
 /// ORB descriptors of one image (CV_8UC3 BGR or CV_8UC1 grey): at most `features` of them.
 std::vector<bow::BinaryDescriptor> orb_descriptors(const cv::Mat& image, int features);
 
+/// A vocabulary from the descriptors of each training document (one per image), the k-means++
+/// draws from std::mt19937_64(settings.seed): the one place the seed becomes an engine, so that the
+/// same images and seed give the same vocabulary in every caller.
+bow::Vocabulary train_vocabulary_from_descriptors(const std::vector<std::vector<bow::BinaryDescriptor>>& documents,
+                                                  const VocabularyTrainingSettings& settings);
+
 /// A vocabulary from images (one training document per image). Throws std::invalid_argument for
 /// no images, an empty or wrongly typed image (naming its index), or no features at all.
 bow::Vocabulary train_vocabulary(const std::vector<cv::Mat>& images, const VocabularyTrainingSettings& settings = {});

@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-#include "cge/mapping/class_palette.hpp"
+#include "cge/voxels/class_palette.hpp"
 
 namespace cge {
 namespace mapping {

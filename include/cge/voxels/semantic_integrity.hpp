@@ -18,7 +18,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "cge/mapping/map_voxel.hpp"
+#include "cge/voxels/map_voxel.hpp"
 
 namespace cge {
 namespace mapping {

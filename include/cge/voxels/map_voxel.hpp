@@ -4,8 +4,8 @@
 
 #include <vector>
 
-#include "cge/mapping/class_palette.hpp"
-#include "cge/mapping/semantic_point.hpp"
+#include "cge/voxels/class_palette.hpp"
+#include "cge/voxels/semantic_point.hpp"
 
 namespace cge {
 namespace mapping {

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "cge/mapping/semantic_point.hpp"
+#include "cge/voxels/semantic_point.hpp"
 
 namespace cge {
 namespace mapping {

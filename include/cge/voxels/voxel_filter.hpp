@@ -13,8 +13,8 @@
 #include <utility>
 #include <vector>
 
-#include "cge/mapping/map_voxel.hpp"
-#include "cge/mapping/semantic_point.hpp"
+#include "cge/voxels/map_voxel.hpp"
+#include "cge/voxels/semantic_point.hpp"
 
 namespace cge {
 namespace mapping {
