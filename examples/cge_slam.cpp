@@ -228,6 +228,10 @@ int main(int argc, char** argv) {
                  "at the end of each interval)")
       ->check(cge_tool::above_zero())
       ->capture_default_str();
+  app.add_option("--semantic-change-frames", opt.semantic_change_frames,
+                 "mode YMK: consecutive frames a semantic change must hold before it inserts a keyframe")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   app.add_option("--out", opt.out, "output folder; must not exist or be empty, unless --force")->required();
   app.add_flag("--map", opt.map,
                "also build the semantic maps from the keyframes: map.ply (dense cloud), map.ot/map.bt (octree), "

@@ -54,7 +54,11 @@ TEST_CASE("run settings: the System's settings from the options", "[run][setting
   opt.loop_correction = "pgo";
   opt.local_ba = "off";
   opt.map = true;
+  opt.keyframe_interval = 7;
+  opt.semantic_change_frames = 3;
   const cge::slam::SystemSettings s = cge::run::system_settings_from(opt);
+  CHECK(s.patch_keyframes.interval_frames == 7);
+  CHECK(s.patch_keyframes.semantic_change_frames == 3);
   CHECK(s.mode == cge::slam::DynamicMode::YM);
   CHECK(s.seed == 42);
   CHECK(s.local_mapping.cull_map_points);

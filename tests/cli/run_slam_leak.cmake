@@ -5,7 +5,8 @@
 #    holds the defaults (combined, min_cge_score 0.5, normalised).
 #    mapping_settings holds the tracking and local-BA defaults.
 # 1b. --tracking-depth-sigma 0 and --local-ba off are recorded and change the trajectory.
-# 1c. --keyframe-interval is recorded and changes mode YMK's keyframes; 0 is refused (exit 2).
+# 1c. --keyframe-interval is recorded and changes mode YMK's keyframes; 0 is refused (exit 2);
+#     --semantic-change-frames is recorded; 0 is refused.
 # 2. --loop-scoring bow_only --loop-min-score 0.1 --cge-scaling raw are recorded in loop_settings.
 # 3. (with cge_sim) the same sequence written to a folder: the masks/ folder gives the same
 #    moving_keypoints per frame as the in-process renderer's labels; without masks/instances.csv
@@ -136,6 +137,11 @@ if(keyframes STREQUAL default_keyframes)
   message(FATAL_ERROR "--keyframe-interval 1 left the keyframes unchanged")
 endif()
 run_tool(2 "${EXE}" ${common} --keyframe-interval 0 --out "${WORK}/ymk_interval_0")
+# --semantic-change-frames is recorded (default 1, the paper's rule); 0 is refused.
+expect_json("${WORK}/ymk_default/summary.json" 1 mapping_settings semantic_change_frames)
+run_tool(0 "${EXE}" ${common} --orb-spread 1 --mode YMK --semantic-change-frames 4 --out "${WORK}/ymk_hold_4")
+expect_json("${WORK}/ymk_hold_4/summary.json" 4 mapping_settings semantic_change_frames)
+run_tool(2 "${EXE}" ${common} --semantic-change-frames 0 --out "${WORK}/ymk_hold_0")
 
 # 2.
 run_tool(0 "${EXE}" ${common} --mode none --loop-scoring bow_only --loop-min-score 0.1 --cge-scaling raw

@@ -44,6 +44,8 @@ struct SlamRunOptions {
   bool frames_given = false;
   int reference_min_observations = slam::MappingSettings{}.reference_min_observations;
   int keyframe_interval = PatchKeyframeSettings<double>{}.interval_frames;  ///< mode YMK: k
+  /// Mode YMK: consecutive frames a semantic change must hold before it inserts a keyframe.
+  int semantic_change_frames = PatchKeyframeSettings<double>{}.semantic_change_frames;
   int orb_spread = slam::OrbSettings{}.spread_oversampling;
   int local_ba_iterations = slam::LocalMappingSettings{}.bundle.solver.max_iterations;
   int local_ba_rounds_per_frame = slam::LocalMappingSettings{}.ba_rounds_per_frame;
