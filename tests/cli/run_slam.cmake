@@ -6,7 +6,8 @@
 #    with --force the user's file is still there, unchanged;
 # 4. a run that fails on bad input (an image that cannot be read) with --force leaves the files
 #    already in the folder as they were and no staging folder behind;
-# 5. with a vocabulary file, loops.csv has one decision per keyframe; 6. --map writes the maps;
+# 5. with a vocabulary file, loops.csv has one decision per keyframe; 6. --map writes the maps
+#    and nothing of OctoMap's reaches standard error;
 # 7. without --vocabulary a rendered run trains one on another preset, says so, closes loops and
 #    prints each accepted one and the precision and recalls, whose counts are those cge_eval loops
 #    computes from the loops.txt and loops.csv it wrote (when cge_eval is built); --vocabulary none
@@ -110,6 +111,10 @@ if(DEFINED VOCAB)
 endif()
 # 6. --map writes the map files, and summary.json carries the map figures.
 run_slam(0 ${args} --map --out "${WORK}/map")
+# OctoMap's own progress lines (" done.") stay off standard error: it is the tool's.
+if(last_stderr MATCHES "done\\.")
+  message(FATAL_ERROR "cge_slam --map let OctoMap write to standard error:\n${last_stderr}")
+endif()
 foreach(name map.ply map.ot map.bt map_top.png)
   if(NOT EXISTS "${WORK}/map/${name}")
     message(FATAL_ERROR "cge_slam --map did not write ${name}")

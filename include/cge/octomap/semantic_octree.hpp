@@ -36,6 +36,7 @@
 #include <octomap/OcTree.h>
 #include <Eigen/Core>
 
+#include "cge/io/stderr_capture.hpp"
 #include "cge/voxels/class_palette.hpp"
 #include "cge/voxels/map_voxel.hpp"
 
@@ -360,7 +361,10 @@ class SemanticOctree {
   void write_ot(const std::filesystem::path& path, bool overwrite = false) {
     refuse_existing(path, overwrite);
     update_inner();
-    if (!tree_->write(path.string())) throw std::runtime_error("SemanticOctree: cannot write " + path.string());
+    io::StderrCapture octomap_messages;  // OctoMap's progress lines ("... done.") are not the tool's output
+    if (!tree_->write(path.string())) {
+      throw std::runtime_error("SemanticOctree: cannot write " + path.string() + with_messages(octomap_messages));
+    }
   }
 
   /// Occupancy only (.bt, an OcTree in OctoMap's binary format: free / occupied / unknown).
@@ -372,7 +376,10 @@ class SemanticOctree {
       plain.setNodeValue(it.getKey(), it->getLogOdds(), /*lazy_eval=*/true);
     }
     plain.updateInnerOccupancy();
-    if (!plain.writeBinary(path.string())) throw std::runtime_error("SemanticOctree: cannot write " + path.string());
+    io::StderrCapture octomap_messages;  // as write_ot
+    if (!plain.writeBinary(path.string())) {
+      throw std::runtime_error("SemanticOctree: cannot write " + path.string() + with_messages(octomap_messages));
+    }
   }
 
   /// The tree (inner nodes brought up to date first).
@@ -409,6 +416,13 @@ class SemanticOctree {
                               static_cast<octomap::key_type>((p >> 16) & 0xffffu),
                               static_cast<octomap::key_type>(p & 0xffffu));
   }
+  /// What OctoMap wrote to standard error during a failed write, as a suffix for the message.
+  static std::string with_messages(io::StderrCapture& capture) {
+    std::cerr.flush();
+    const std::string text = capture.finish();
+    return text.empty() ? std::string() : " (OctoMap: " + text + ")";
+  }
+
   static void refuse_existing(const std::filesystem::path& path, bool overwrite) {
     if (!overwrite && std::filesystem::exists(path)) {
       throw std::invalid_argument("SemanticOctree: " + path.string() + " exists (not overwritten)");
