@@ -22,6 +22,10 @@ import os
 import re
 import sys
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from expected_problems import compare_with_expected  # noqa: E402
+
 SCANNED_DIRS = ("include", "src", "examples", "tests", "bench", "docs")
 SCANNED_FILES = ("README.md",)
 # Not scanned: generated files (their generator, examples/results/results_report.py, is scanned),
@@ -133,22 +137,10 @@ def main():
         print(f"check_doc_citations: no citation found under {args.root}: wrong root?", file=sys.stderr)
         return 1
     if args.expect is not None:
-        try:
-            with open(args.expect, encoding="utf-8") as f:
-                expected = [l.rstrip("\n") for l in f if l.strip() and not l.startswith("#")]
-        except OSError as e:
-            print(f"check_doc_citations: cannot read --expect {args.expect}: {e.strerror}", file=sys.stderr)
-            return 2
-        missing = [p for p in expected if p not in problems]
-        extra = [p for p in problems if p not in expected]
-        for p in missing:
-            print(f"expected but not reported: {p}")
-        for p in extra:
-            print(f"reported but not expected: {p}")
-        if missing or extra:
-            return 1
-        print(f"check_doc_citations: {count} citations, the {len(expected)} expected problems and no other")
-        return 0
+        status, expected = compare_with_expected("check_doc_citations", args.expect, problems)
+        if status == 0:
+            print(f"check_doc_citations: {count} citations, the {expected} expected problems and no other")
+        return status
     for p in problems:
         print(p)
     if problems:

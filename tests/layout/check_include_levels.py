@@ -37,6 +37,10 @@ import os
 import re
 import sys
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from expected_problems import compare_with_expected  # noqa: E402
+
 # folder -> (rank, library group). Ranks order the folders; a folder includes only lower ranks
 # (and itself). Level-1 folders share rank 1 and may not include one another.
 FOLDERS = {
@@ -189,22 +193,10 @@ def main():
         print(f"check_include_levels: {e}", file=sys.stderr)
         return 2
     if args.expect is not None:
-        try:
-            with open(args.expect, encoding="utf-8") as f:
-                expected = [l.rstrip("\n") for l in f if l.strip() and not l.startswith("#")]
-        except OSError as e:
-            print(f"check_include_levels: cannot read --expect {args.expect}: {e.strerror}", file=sys.stderr)
-            return 2
-        missing = [p for p in expected if p not in problems]
-        extra = [p for p in problems if p not in expected]
-        for p in missing:
-            print(f"expected but not reported: {p}")
-        for p in extra:
-            print(f"reported but not expected: {p}")
-        if missing or extra:
-            return 1
-        print(f"check_include_levels: {headers} headers, the {len(expected)} expected problems and no other")
-        return 0
+        status, expected = compare_with_expected("check_include_levels", args.expect, problems)
+        if status == 0:
+            print(f"check_include_levels: {headers} headers, the {expected} expected problems and no other")
+        return status
     for p in problems:
         print(p)
     if problems:
