@@ -220,6 +220,10 @@ int main(int argc, char** argv) {
                  "local BA rounds solved per frame: 1 solves the first in the keyframe's frame and the second "
                  "in the next frame before it is tracked, 2 both in the keyframe's frame (same outputs, other times)")
       ->check(CLI::Range(1, 2));
+  app.add_option("--local-ba-iterations-per-frame", opt.local_ba_iterations_per_frame,
+                 "local BA iterations solved per frame, across its rounds, restarting from the current estimate "
+                 "(0: whole rounds, --local-ba-rounds-per-frame; other values change the trajectory)")
+      ->check(CLI::Range(0, 1000));
   app.add_option("--orb-spread", opt.orb_spread,
                  "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")
       ->check(CLI::Range(1, 8));

@@ -380,3 +380,85 @@ TEST_CASE("BundleAdjustmentRun: rounds solved one at a time give exactly what ad
   CHECK(stepwise.iterations == whole.iterations);
   CHECK(stepwise.final_cost == whole.final_cost);
 }
+
+TEST_CASE("BundleAdjustmentRun in slices: no slice over its limit, a round within its budget, the same optimum",
+          "[ceres][slices]") {
+  std::mt19937 rng(43);
+  BAScene s = make_ba_scene(rng, 6, 150, true);
+  for (std::size_t k = 0; k < s.observations.size(); k += 17) s.observations[k].pixel_px += Eigen::Vector2d(40, -25);
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector3d> points;
+  perturb(rng, s, poses, points, {0});
+  BundleAdjustmentSettings settings;  // two rounds, the first robust, 100 iterations each
+  const BundleAdjustmentResult whole = BundleAdjuster(settings).adjust(s.K, poses, points, s.observations, {0});
+  REQUIRE(whole.converged);
+
+  cge::BundleAdjustmentRun run(settings, s.K, poses, points, s.observations, {0});
+  CHECK_THROWS_AS(run.solve_next_slice(0), std::invalid_argument);
+  constexpr int kSlice = 2;
+  int slices = 0, total = 0;
+  while (!run.done()) {
+    const int rounds_before = run.rounds_solved();
+    const int used = run.solve_next_slice(kSlice);
+    CHECK(used <= kSlice);
+    // A slice that used all its iterations leaves the round open unless the round converged there.
+    if (used < kSlice) CHECK(run.rounds_solved() == rounds_before + 1);
+    CHECK(run.round_iterations() <= settings.solver.max_iterations);
+    total += used;
+    REQUIRE(++slices < 200);
+  }
+  CHECK(slices > 2);  // the rounds really were cut
+  const BundleAdjustmentResult sliced = run.result();
+  CHECK(sliced.iterations == total);
+  CHECK(sliced.rounds == 2);
+  CHECK(sliced.converged);
+  // The same optimum as the whole solve (each slice restarts the damping, so not bit for bit):
+  // the plain cost computed here, the poses against the whole solve's, the same outliers.
+  const double cost_whole = plain_cost(s, whole.T_world_camera, whole.points_world_m);
+  const double cost_sliced = plain_cost(s, sliced.T_world_camera, sliced.points_world_m);
+  CHECK(cost_sliced == Approx(cost_whole).epsilon(1e-6));
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    CAPTURE(i);
+    CHECK(translation_error_m(sliced.T_world_camera[i], whole.T_world_camera[i]) < 1e-7);
+    CHECK(rotation_error_rad(sliced.T_world_camera[i], whole.T_world_camera[i]) < 1e-7);
+  }
+  CHECK(sliced.outliers == whole.outliers);
+  CHECK(sliced.outlier_count > 0);
+}
+
+TEST_CASE("BundleAdjustmentRun in slices: a round ends at its iteration budget; a slice past it is cut",
+          "[ceres][slices]") {
+  std::mt19937 rng(44);
+  BAScene s = make_ba_scene(rng, 5, 120, true);
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector3d> points;
+  perturb(rng, s, poses, points, {0});
+  BundleAdjustmentSettings settings;
+  settings.solver.max_iterations = 3;
+  settings.solver.function_tolerance = 0;  // no early convergence: every round spends its budget
+  settings.solver.gradient_tolerance = 0;
+  settings.solver.parameter_tolerance = 0;
+  const BundleAdjustmentResult whole = BundleAdjuster(settings).adjust(s.K, poses, points, s.observations, {0});
+
+  cge::BundleAdjustmentRun run(settings, s.K, poses, points, s.observations, {0});
+  CHECK(run.solve_next_slice(2) == 2);
+  CHECK(run.rounds_solved() == 0);
+  CHECK(run.round_iterations() == 2);
+  CHECK(run.solve_next_slice(2) == 1);  // the round's third and last iteration
+  CHECK(run.rounds_solved() == 1);
+  CHECK(run.round_iterations() == 0);
+  // A slice as large as the round's budget is the whole round, bit for bit.
+  CHECK(run.solve_next_slice(1000) == 3);
+  CHECK(run.done());
+  CHECK(run.solve_next_slice(5) == 0);
+  const BundleAdjustmentResult sliced = run.result();
+  CHECK(sliced.iterations == 6);
+  CHECK(whole.iterations == 6);
+  // Sliced, the first round differs from the whole solve only by the restarted damping: the end
+  // is near it, and both are far nearer the truth than the start.
+  for (std::size_t i = 1; i < poses.size(); ++i) {
+    CAPTURE(i);
+    CHECK(translation_error_m(sliced.T_world_camera[i], s.T_world_camera[i]) <
+          0.1 * translation_error_m(poses[i], s.T_world_camera[i]));
+  }
+}

@@ -325,6 +325,11 @@ TEST_CASE("Settings: modes parse and bad values are refused", "[slam]") {
   CHECK_NOTHROW(s.validate());
   s.tracker.ratio = 0;
   CHECK_THROWS_WITH(s.validate(), Catch::Contains("tracker.ratio"));
+  cge::slam::SystemSettings slices;
+  slices.local_mapping.ba_iterations_per_frame = 3;
+  CHECK_NOTHROW(slices.validate());
+  slices.local_mapping.ba_iterations_per_frame = -1;
+  CHECK_THROWS_WITH(slices.validate(), Catch::Contains("local_mapping.ba_iterations_per_frame"));
   CHECK(cge::slam::frame_seed(1, 0) != cge::slam::frame_seed(1, 1));
   CHECK(cge::slam::frame_seed(1, 0) != cge::slam::frame_seed(2, 0));
 }

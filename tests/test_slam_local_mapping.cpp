@@ -360,6 +360,33 @@ TEST_CASE("LocalBundleAdjustment round by round: each round lands in the map, th
   for (int j = 0; j < 80; ++j) CHECK(stepwise.map.map_point(j).position_world == whole.map.map_point(j).position_world);
 }
 
+TEST_CASE("LocalBundleAdjustment in slices: each slice lands in the map within its iterations, the end near the whole BA",
+          "[slam][slices]") {
+  std::mt19937 rng_a(9), rng_b(9);
+  TruthMap whole = make_map(4, 80, rng_a);
+  TruthMap sliced = make_map(4, 80, rng_b);
+  const cge::slam::LocalMappingSettings settings;
+  cge::slam::local_bundle_adjustment(whole.map, 3, kIntrinsics, settings, 1.2);
+
+  const Eigen::Isometry3d start = sliced.map.keyframe(3).T_world_camera;
+  cge::slam::LocalBundleAdjustment adjustment(sliced.map, 3, kIntrinsics, settings, 1.2);
+  CHECK(adjustment.solve_next_slice(sliced.map, 1) == 1);
+  CHECK(adjustment.report().ran);
+  // One iteration is in the map already: nearer the truth than the start.
+  CHECK(translation_error_m(sliced.map.keyframe(3).T_world_camera, sliced.true_poses[3]) <
+        translation_error_m(start, sliced.true_poses[3]));
+  int slices = 1;
+  while (!adjustment.done()) {
+    CHECK(adjustment.solve_next_slice(sliced.map, 1) <= 1);
+    REQUIRE(++slices < 100);
+  }
+  CHECK(adjustment.solve_next_slice(sliced.map, 1) == 0);
+  for (int k = 0; k < 4; ++k) {
+    CAPTURE(k);
+    CHECK(translation_error_m(sliced.map.keyframe(k).T_world_camera, whole.map.keyframe(k).T_world_camera) < 1e-4);
+  }
+}
+
 TEST_CASE("LocalBundleAdjustment with nothing to optimise is done at once", "[slam]") {
   cge::slam::Map map = one_keyframe_map(10.f, 10.f, 1);
   cge::slam::LocalBundleAdjustment adjustment(map, 0, kIntrinsics, cge::slam::LocalMappingSettings{}, 1.2);

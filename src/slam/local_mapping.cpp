@@ -149,6 +149,13 @@ void LocalBundleAdjustment::solve_next_round(Map& map) {
   write_back(map);
 }
 
+int LocalBundleAdjustment::solve_next_slice(Map& map, int max_iterations) {
+  if (done()) return 0;
+  const int used = run_->solve_next_slice(max_iterations);
+  write_back(map);
+  return used;
+}
+
 void LocalBundleAdjustment::solve_remaining_rounds(Map& map) {
   if (done()) return;
   while (!run_->done()) run_->solve_next_round();

@@ -345,7 +345,12 @@ void System::local_mapping(int keyframe_id) {
 void System::advance_local_mapping(FrameRecord& charged, int max_rounds) {
   if (local_ba_ == nullptr) return;
   const auto start = Clock::now();
-  if (max_rounds >= local_ba_->rounds_left()) {
+  const int iterations_per_frame = settings_.local_mapping.ba_iterations_per_frame;
+  if (iterations_per_frame > 0 && max_rounds != kAllRounds) {
+    // Each slice uses at least one iteration or ends a round, so this loop is bounded.
+    int left = iterations_per_frame;
+    while (left > 0 && !local_ba_->done()) left -= local_ba_->solve_next_slice(map_, left);
+  } else if (max_rounds >= local_ba_->rounds_left()) {
     local_ba_->solve_remaining_rounds(map_);  // one write into the map
   } else {
     for (int i = 0; i < max_rounds; ++i) local_ba_->solve_next_round(map_);

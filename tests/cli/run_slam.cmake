@@ -11,7 +11,8 @@
 # 7. without --vocabulary a rendered run trains one on another preset, says so, closes loops and
 #    prints each accepted one and the precision and recalls, whose counts are those cge_eval loops
 #    computes from the loops.txt and loops.csv it wrote (when cge_eval is built); --vocabulary none
-#    switches loop closing off; a bad --preset, --preset with --dataset and a bad --cge-ties exit 2.
+#    switches loop closing off; a bad --preset, --preset with --dataset, a bad --cge-ties and a negative
+#    --local-ba-iterations-per-frame exit 2.
 cmake_minimum_required(VERSION 3.16)
 
 foreach(var EXE WORK)
@@ -201,6 +202,10 @@ endif()
 run_slam(2 ${args} --cge-ties first --out "${WORK}/bad")
 if(NOT last_stderr MATCHES "--cge-ties")
   message(FATAL_ERROR "a bad --cge-ties is not named: ${last_stderr}")
+endif()
+run_slam(2 ${args} --local-ba-iterations-per-frame -1 --out "${WORK}/bad")
+if(NOT last_stderr MATCHES "--local-ba-iterations-per-frame")
+  message(FATAL_ERROR "a negative --local-ba-iterations-per-frame is not named: ${last_stderr}")
 endif()
 if(EXISTS "${WORK}/bad")
   message(FATAL_ERROR "a refused run created its --out folder")

@@ -144,9 +144,17 @@ class BundleAdjustmentRun {
   int rounds_solved() const { return result_.rounds; }
   /// Rounds still to solve (0 when done()).
   int rounds_left() const { return finished_ ? 0 : settings_.rounds - result_.rounds; }
-  /// Solves the next round; after each but the last, the observations over the chi2 threshold sit
-  /// out the next round. Nothing to do when done().
+  /// Solves the next round (what is left of it, when slices of it were solved); after each but the
+  /// last, the observations over the chi2 threshold sit out the next round. Nothing to do when done().
   void solve_next_round();
+  /// Solves at most `max_iterations` (>= 1) Levenberg-Marquardt iterations of the current round,
+  /// from the current estimate (the damping starts afresh, as in a new solve). The round ends when
+  /// Ceres stops before the slice's limit (converged, or no step found) or when the round has used
+  /// settings.solver.max_iterations; then the outliers are classified as after a whole round.
+  /// Returns the iterations used (0 when done()). Throws std::invalid_argument when max_iterations < 1.
+  int solve_next_slice(int max_iterations);
+  /// Iterations used so far by the current round's slices (0 at a round's start).
+  int round_iterations() const { return round_iterations_; }
   /// Poses, points and outlier flags at the current state (after the rounds solved so far).
   BundleAdjustmentResult result() const;
 
@@ -167,6 +175,8 @@ class BundleAdjustmentRun {
   std::vector<bool> used_pose_, used_point_;
   BundleAdjustmentResult result_;  ///< costs, rounds, iterations, convergence so far
   bool finished_ = false;
+  int round_iterations_ = 0;       ///< iterations of the current round's slices so far
+  double round_initial_cost_ = 0;  ///< cost at the start of the current round's first slice
 };
 
 class BundleAdjuster {
@@ -264,7 +274,15 @@ inline BundleAdjustmentRun::BundleAdjustmentRun(const BundleAdjustmentSettings& 
 
 inline void BundleAdjustmentRun::solve_next_round() {
   if (finished_) return;
+  solve_next_slice(settings_.solver.max_iterations - round_iterations_);
+}
+
+inline int BundleAdjustmentRun::solve_next_slice(int max_iterations) {
+  if (max_iterations < 1) throw std::invalid_argument("BundleAdjustmentRun: a slice needs at least 1 iteration");
+  if (finished_) return 0;
   const int round = result_.rounds;
+  const int budget_left = settings_.solver.max_iterations - round_iterations_;
+  const int slice_limit = max_iterations < budget_left ? max_iterations : budget_left;
   // One loss shared by every residual; it outlives the problem, which does not own it.
   ceres::HuberLoss huber(settings_.huber_delta > 0 ? settings_.huber_delta : 1.0);  // any width when unused
   ceres::Problem problem(problem_options());
@@ -297,22 +315,30 @@ inline void BundleAdjustmentRun::solve_next_round() {
   if (problem.NumResidualBlocks() == 0) {
     if (round == 0) result_.converged = true;  // nothing to optimise
     finished_ = true;
-    return;
+    return 0;
   }
   ceres::Solver::Options options = settings_.solver.options(/*sparse=*/settings_.sparse_schur, /*schur=*/true);
+  options.max_num_iterations = slice_limit;
   options.linear_solver_ordering = ordering;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  if (round == 0) result_.initial_cost = summary.initial_cost;
+  const int used = static_cast<int>(summary.iterations.size()) - 1;
+  if (round_iterations_ == 0) round_initial_cost_ = summary.initial_cost;
+  if (round == 0 && round_iterations_ == 0) result_.initial_cost = summary.initial_cost;
+  round_iterations_ += used;
   result_.final_cost = summary.final_cost;
-  result_.iterations += static_cast<int>(summary.iterations.size()) - 1;
+  result_.iterations += used;
+  // A slice stopped by its own limit, with the round's budget not spent, leaves the round open.
+  const bool hit_slice_limit = summary.termination_type == ceres::NO_CONVERGENCE && used >= slice_limit;
+  if (hit_slice_limit && round_iterations_ < settings_.solver.max_iterations) return used;
   result_.rounds = round + 1;
   result_.converged =
       summary.termination_type == ceres::CONVERGENCE ||
-      (summary.termination_type == ceres::NO_CONVERGENCE && summary.final_cost >= summary.initial_cost);
+      (summary.termination_type == ceres::NO_CONVERGENCE && summary.final_cost >= round_initial_cost_);
+  round_iterations_ = 0;
   if (result_.rounds == settings_.rounds) {
     finished_ = true;
-    return;
+    return used;
   }
   // Outliers at this round's optimum sit out the next round (ORB-SLAM2's local BA).
   std::vector<Eigen::Isometry3d> T_camera_world;
@@ -322,6 +348,7 @@ inline void BundleAdjustmentRun::solve_next_round() {
     const BundleObservation& o = observations_[k];
     active_[k] = !is_outlier(o, T_camera_world[o.keyframe], points_[o.point], nullptr);
   }
+  return used;
 }
 
 inline BundleAdjustmentResult BundleAdjustmentRun::result() const {

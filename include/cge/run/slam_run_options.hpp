@@ -49,6 +49,7 @@ struct SlamRunOptions {
   int orb_spread = slam::OrbSettings{}.spread_oversampling;
   int local_ba_iterations = slam::LocalMappingSettings{}.bundle.solver.max_iterations;
   int local_ba_rounds_per_frame = slam::LocalMappingSettings{}.ba_rounds_per_frame;
+  int local_ba_iterations_per_frame = slam::LocalMappingSettings{}.ba_iterations_per_frame;  ///< 0: whole rounds
   std::string map_maintenance = "all";  ///< all, none or a comma list of rules
   int keyframe_min_gap = slam::SystemSettings{}.orbslam2_keyframes.min_frame_gap;
   std::string loop_correction = "pgo+ba";  ///< none | pgo | pgo+ba

@@ -70,6 +70,10 @@ class LocalBundleAdjustment {
   int rounds_left() const;
   /// Solves the next round and writes the optimised poses and points into `map`.
   void solve_next_round(Map& map);
+  /// Solves at most `max_iterations` (>= 1) iterations of the current round
+  /// (BundleAdjustmentRun::solve_next_slice) and writes the estimate into `map`; returns the
+  /// iterations used (0 when done()).
+  int solve_next_slice(Map& map, int max_iterations);
   /// Solves every round left, then writes the result into `map` once.
   void solve_remaining_rounds(Map& map);
   /// What was done so far (complete once done()).

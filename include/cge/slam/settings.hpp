@@ -195,6 +195,12 @@ struct LocalMappingSettings {
   /// longer carries the whole BA (ORB-SLAM2 runs it in a thread of its own). >= bundle.rounds solves
   /// the whole BA in the keyframe's frame.
   int ba_rounds_per_frame = 1;
+  /// When > 0: Levenberg-Marquardt iterations of the pending local BA solved per camera frame,
+  /// over rounds, instead of whole rounds (ba_rounds_per_frame is then unused). Each slice restarts
+  /// the solver from the current estimate and writes it into the map, so the frames in between are
+  /// tracked against a partly optimised window, as ORB-SLAM2's tracking runs while its local BA
+  /// iterates. Changes the trajectory. 0: whole rounds. Count >= 0; default 0 (docs/REAL_DATA.md).
+  int ba_iterations_per_frame = 0;
   /// Rounds, loss and iterations: a Huber round and a plain round on the chi2 inliers, as ORB-SLAM2.
   BundleAdjustmentSettings bundle = [] {
     BundleAdjustmentSettings b;
@@ -307,6 +313,8 @@ struct SystemSettings {
     if (local_mapping.covisible_keyframes < 0) fail("local_mapping.covisible_keyframes must not be negative");
     if (local_mapping.fixed_keyframes < 0) fail("local_mapping.fixed_keyframes must not be negative");
     if (local_mapping.ba_rounds_per_frame < 1) fail("local_mapping.ba_rounds_per_frame must be at least 1");
+    if (local_mapping.ba_iterations_per_frame < 0)
+      fail("local_mapping.ba_iterations_per_frame must not be negative");
     if (!(local_mapping.depth_sigma_per_m > 0)) fail("local_mapping.depth_sigma_per_m must be > 0");
     local_mapping.bundle.validate();
     local_mapping.maintenance.validate();

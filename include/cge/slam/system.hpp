@@ -168,7 +168,8 @@ class System {
   /// timed as local_mapping.
   void local_mapping(int keyframe_id);
   /// Solves at most `max_rounds` rounds of the pending local BA (ba_rounds_per_frame in a frame,
-  /// kAllRounds before the map changes and at the end); when it is done, the keyframe's local
+  /// kAllRounds before the map changes and at the end), or, when ba_iterations_per_frame > 0 and
+  /// not kAllRounds, at most that many iterations; when it is done, the keyframe's local
   /// mapping ends (complete_keyframe). The time goes to `charged`'s stages.
   void advance_local_mapping(FrameRecord& charged, int max_rounds);
   static constexpr int kAllRounds = std::numeric_limits<int>::max();
