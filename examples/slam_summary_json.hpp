@@ -86,6 +86,7 @@ inline nlohmann::ordered_json slam_summary_json(const cge::run::SlamRun& run) {
                            {"orb_spread", used.frame.orb.spread_oversampling},
                            {"local_ba_iterations", used.local_mapping.bundle.solver.max_iterations},
                            {"local_ba_rounds_per_frame", used.local_mapping.ba_rounds_per_frame},
+                           {"local_ba_iterations_per_frame", used.local_mapping.ba_iterations_per_frame},
                            {"map_maintenance", opt.map_maintenance},
                            {"loop_correction", opt.loop_correction}};
   const cge::run::DynamicLeak& leak = s.dynamic_leak;

@@ -139,6 +139,7 @@ endif()
 run_tool(2 "${EXE}" ${common} --keyframe-interval 0 --out "${WORK}/ymk_interval_0")
 # --semantic-change-frames is recorded (default 1, the paper's rule); 0 is refused.
 expect_json("${WORK}/ymk_default/summary.json" 1 mapping_settings semantic_change_frames)
+expect_json("${WORK}/ymk_default/summary.json" 0 mapping_settings local_ba_iterations_per_frame)
 run_tool(0 "${EXE}" ${common} --orb-spread 1 --mode YMK --semantic-change-frames 4 --out "${WORK}/ymk_hold_4")
 expect_json("${WORK}/ymk_hold_4/summary.json" 4 mapping_settings semantic_change_frames)
 run_tool(2 "${EXE}" ${common} --semantic-change-frames 0 --out "${WORK}/ymk_hold_0")
