@@ -204,7 +204,10 @@ struct LocalMappingSettings {
   /// Rounds, loss and iterations: a Huber round and a plain round on the chi2 inliers, as ORB-SLAM2.
   BundleAdjustmentSettings bundle = [] {
     BundleAdjustmentSettings b;
-    b.solver.max_iterations = 10;  // per round; the window starts near its optimum
+    // Per round. ORB-SLAM2 Optimizer.cc LocalBundleAdjustment: optimize(5), then optimize(10)
+    // without the outliers; ours caps both at 5 (the plain round stops after 2-3 on the real
+    // fr1/rpy slice). 10 gave a 95th percentile a quarter higher, ATE no better (docs/REAL_DATA.md).
+    b.solver.max_iterations = 5;
     // A relative cost change of 1e-6 is converged enough for a window the next keyframe adjusts
     // again (1e-10: 8 iterations instead of 3 on a 13 000-observation window, same cost to 1e-8).
     b.solver.function_tolerance = 1e-6;
