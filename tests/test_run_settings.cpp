@@ -31,7 +31,7 @@ TEST_CASE("run settings: the temporal filter option", "[run][settings]") {
   cge::run::apply_temporal_filter("off", "box", seg);
   CHECK(seg.temporal_filter_sources.empty());
   CHECK(seg.temporal_filter.overlap == cge::TemporalOverlap::box);
-  for (const std::string bad : {"2", "2/", "a/3", "2/3x", "2/3/4"}) {
+  for (const std::string bad : {"2", "2/", "a/3", "2/3x", "2/3/4", " 2/3", "+2/3", "2/ 3", "-1/3", "99999/3"}) {
     CAPTURE(bad);
     CHECK(message_of([&] { cge::run::apply_temporal_filter(bad, "box", seg); }) ==
           "--temporal-filter: '" + bad + "' is not N/M (e.g. 2/3) or off");

@@ -1,8 +1,10 @@
 // Tests of the loop scenes as the paper's robot experiment (cge/sim/presets.hpp, docs/SIMULATION.md):
 // 8 laps after the first visit of the place, each revisit a loop event of its own (the screen and
-// the glances), the pedestrian close in front of the camera at every revisit of loop_dynamic, the
-// objects of loop_structure_change absent at the first visit and present at every revisit, and
-// determinism. The visits and events are found from the poses and the loop list alone.
+// the glances), the pedestrian close in front of the camera at every revisit of loop_dynamic and
+// (when asked for) the pair of people hiding the place over the whole of the group revisits, the objects of
+// loop_structure_change absent at the first visit and present at every revisit and the restocked
+// shelf from its revisit on, and determinism. The visits and events are found from the poses and
+// the loop list alone; what a frame shows of the place, from its exact depth.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -88,6 +90,40 @@ double fraction_of(const cv::Mat& labels, const std::set<int>& ids) {
   return static_cast<double>(n) / static_cast<double>(labels.total());
 }
 
+/// Frames of revisit k (1 = the first return) whose camera is within `half_arc_deg` of the place on
+/// the circle: the place shows through the screen's opening only within about 26 degrees.
+std::vector<int> frames_near_pass(const SequenceSpec& spec, const Run& visit, double half_arc_deg) {
+  const int at = closest_to_place(spec, visit);
+  std::vector<int> frames;
+  for (int i = std::max(0, at - 30); i < std::min(static_cast<int>(spec.T_world_camera.size()), at + 31); ++i) {
+    const Eigen::Vector3d c = spec.T_world_camera[static_cast<std::size_t>(i)].translation();
+    if (std::abs(std::atan2(c.y(), c.x())) * 180 / kPi <= half_arc_deg) frames.push_back(i);
+  }
+  return frames;
+}
+
+/// Fraction of the image showing the room beyond the screen (what the opening lets through: the
+/// place), from the exact depth, leaving out the pixels of `excluded` instances.
+double place_fraction(const cge::sim::SequenceRenderer& r, int frame, const std::set<int>& excluded) {
+  cge::sim::RenderedFrame f;
+  cge::sim::RenderWorkspace w;
+  r.render_into(frame, f, w);
+  const cge::sim::PinholeCamera& cam = r.camera();
+  const double beyond_screen_m = cge::sim::PresetSettings{}.loop_screen_radius_m + 0.05;
+  int n = 0;
+  for (int v = 0; v < cam.height_px; ++v) {
+    for (int u = 0; u < cam.width_px; ++u) {
+      if (excluded.count(f.instance_labels.at<std::uint16_t>(v, u)) > 0) continue;
+      const double z = w.depth_exact_m.at<float>(v, u);
+      if (!std::isfinite(z)) continue;
+      const Eigen::Vector3d p =
+          f.T_world_camera * Eigen::Vector3d((u - cam.cx_px) / cam.fx_px * z, (v - cam.cy_px) / cam.fy_px * z, z);
+      n += p.head<2>().norm() > beyond_screen_m ? 1 : 0;
+    }
+  }
+  return static_cast<double>(n) / static_cast<double>(cam.width_px * cam.height_px);
+}
+
 std::set<int> ids_of_class(const SequenceSpec& spec, int class_id) {
   std::set<int> ids;
   for (const auto& info : spec.instances) {
@@ -152,18 +188,54 @@ TEST_CASE("loop_dynamic: the pedestrian is close in front of the camera at every
   }
 }
 
+TEST_CASE("loop_dynamic: on the group revisits two people hide the place the whole time it is in view",
+          "[sim][presets][loops]") {
+  cge::sim::PresetSettings settings;
+  CHECK(settings.group_revisits.empty());  // off by default (presets.hpp says why)
+  settings.group_revisits = {3, 7};
+  const cge::sim::SequenceRenderer r(cge::sim::make_preset("loop_dynamic", kFrames, 3, settings));
+  const std::set<int> people = ids_of_class(r.spec(), cge::kCocoPerson);
+  const std::vector<Run> visits = visits_of_the_place(r.spec());
+  REQUIRE(visits.size() == 9);
+  // Without people the place fills most of the view at the place (the first visit).
+  CHECK(place_fraction(r, closest_to_place(r.spec(), visits[0]), people) > 0.9);
+  for (std::size_t k = 1; k < visits.size(); ++k) {
+    INFO("revisit " << k);
+    const bool group = std::find(settings.group_revisits.begin(), settings.group_revisits.end(), static_cast<int>(k)) !=
+                       settings.group_revisits.end();
+    const std::vector<int> frames = frames_near_pass(r.spec(), visits[k], 40);
+    REQUIRE(frames.size() >= 12);  // 6 degrees per frame
+    double most_place = 0;
+    for (const int i : frames) most_place = std::max(most_place, place_fraction(r, i, people));
+    // The group hides all but a strip of the place in every frame; a single pedestrian leaves much
+    // of it in view at some frame of the pass.
+    if (group) {
+      CHECK(most_place < 0.15);
+      const cge::sim::RenderedFrame f = r.render(closest_to_place(r.spec(), visits[k]));
+      CHECK(fraction_of(f.instance_labels, people) >= 0.8);
+      std::set<int> in_view;
+      for (const int id : people) {
+        if (cv::countNonZero(f.instance_labels == id) > 0) in_view.insert(id);
+      }
+      CHECK(in_view.size() == 2);
+    } else {
+      CHECK(most_place > 0.3);
+    }
+  }
+}
+
 TEST_CASE(
-    "loop_structure_change: two chairs, a laptop and an umbrella absent at the first visit, present at every "
-    "revisit",
+    "loop_structure_change: two chairs, a laptop and an umbrella absent at the first visit, in view at every "
+    "revisit before the second change",
     "[sim][presets][loops]") {
   const cge::sim::SequenceRenderer r(cge::sim::make_preset("loop_structure_change", kFrames, 3));
-  std::set<int> added;
   int appear = kFrames;
   for (const auto& p : r.spec().static_primitives) {
-    if (p.first_frame > 0 && p.instance_id != 0) {
-      added.insert(p.instance_id);
-      appear = std::min(appear, p.first_frame);
-    }
+    if (p.first_frame > 0 && p.instance_id != 0) appear = std::min(appear, p.first_frame);
+  }
+  std::set<int> added;  // the first change (the restocked books and the tv come later)
+  for (const auto& p : r.spec().static_primitives) {
+    if (p.first_frame == appear && p.instance_id != 0) added.insert(p.instance_id);
   }
   std::multiset<std::string> classes;
   for (const auto& info : r.spec().instances) {
@@ -180,11 +252,77 @@ TEST_CASE(
     if (p.first_frame == appear && p.instance_id != 0) CHECK((T_camera_world * p.T_world_local.translation()).z() < 0);
   }
   CHECK(fraction_of(r.render(closest_to_place(r.spec(), visits[0])).instance_labels, added) == 0);
+  const int restock_revisit = cge::sim::PresetSettings{}.restock_revisit;
+  for (int k = 1; k < restock_revisit; ++k) {  // from then on the tv stands in front of them
+    INFO("revisit " << k);
+    const cv::Mat labels = r.render(closest_to_place(r.spec(), visits[static_cast<std::size_t>(k)])).instance_labels;
+    for (const int id : added) CHECK(cv::countNonZero(labels == id) > 0);
+    CHECK(fraction_of(labels, added) >= 0.1);
+  }
+}
+
+TEST_CASE(
+    "loop_structure_change: before the restock revisit the shelf is refilled and a tv hides most of what the last "
+    "revisit saw",
+    "[sim][presets][loops]") {
+  const cge::sim::PresetSettings defaults;
+  REQUIRE(defaults.restock_revisit == 4);
+  const cge::sim::SequenceRenderer r(cge::sim::make_preset("loop_structure_change", kFrames, 3));
+  int first_change = kFrames;
+  for (const auto& p : r.spec().static_primitives) {
+    if (p.first_frame > 0 && p.instance_id != 0) first_change = std::min(first_change, p.first_frame);
+  }
+  std::set<int> restocked, old_books;
+  int restock = 0;
+  for (const auto& p : r.spec().static_primitives) {
+    if (p.first_frame > first_change && p.instance_id != 0) {  // (the screens have no instance)
+      restocked.insert(p.instance_id);
+      restock = p.first_frame;
+    }
+  }
+  for (const auto& info : r.spec().instances) {
+    if (info.class_id == *cge::coco_class_id("book") && restocked.count(info.id) == 0) old_books.insert(info.id);
+  }
+  std::multiset<std::string> classes;
+  for (const auto& info : r.spec().instances) {
+    if (restocked.count(info.id) > 0) classes.insert(std::string(cge::coco_class_name(info.class_id)));
+  }
+  CHECK(classes == std::multiset<std::string>{"book", "book", "book", "book", "tv"});  // a row each, the tv
+  const std::vector<Run> visits = visits_of_the_place(r.spec());
+  REQUIRE(visits.size() == 9);
+  CHECK(restock > visits[3].last);
+  CHECK(restock < visits[4].first);
+  // Added while the camera looks the other way.
+  const Eigen::Isometry3d T_camera_world = r.spec().T_world_camera[static_cast<std::size_t>(restock)].inverse();
+  for (const auto& p : r.spec().static_primitives) {
+    if (p.first_frame == restock) CHECK((T_camera_world * p.T_world_local.translation()).z() < 0);
+  }
   for (std::size_t k = 1; k < visits.size(); ++k) {
     INFO("revisit " << k);
     const cv::Mat labels = r.render(closest_to_place(r.spec(), visits[k])).instance_labels;
-    for (const int id : added) CHECK(cv::countNonZero(labels == id) > 0);
-    CHECK(fraction_of(labels, added) >= 0.1);
+    if (k < 4) {
+      CHECK(fraction_of(labels, restocked) == 0);
+      CHECK(fraction_of(labels, old_books) >= 0.1);
+    } else {
+      CHECK(fraction_of(labels, restocked) >= 0.9);  // the tv fills the view at the place
+      CHECK(fraction_of(labels, old_books) == 0);
+    }
+  }
+  // Over the whole pass of the restock revisit, at most a strip of what the revisit before saw
+  // stays in view (the room beyond the screen, but for the new books); at the revisit before,
+  // much of it shows at some frame.
+  const auto most_unchanged = [&](std::size_t k) {
+    const std::vector<int> frames = frames_near_pass(r.spec(), visits[k], 40);
+    CHECK(frames.size() >= 12);  // 6 degrees per frame
+    double most = 0;
+    for (const int i : frames) most = std::max(most, place_fraction(r, i, restocked));
+    return most;
+  };
+  CHECK(most_unchanged(3) > 0.3);
+  CHECK(most_unchanged(4) < 0.15);
+  // The old books never show again.
+  for (const int i : frames_near_pass(r.spec(), visits[5], 40)) {
+    CHECK(fraction_of(r.render(i).instance_labels, old_books) == 0);
   }
 }
 
@@ -248,6 +386,16 @@ TEST_CASE("loop scenes: bad scene settings name the field", "[sim][presets][erro
       {[](cge::sim::PresetSettings& s) { s.loop_glance_pitch_deg = -1; }, "loop_glance_pitch_deg"},
       {[](cge::sim::PresetSettings& s) { s.loop_glance_half_arc_deg = 0; }, "loop_glance_half_arc_deg"},
       {[](cge::sim::PresetSettings& s) { s.loop_margin_deg = 200; }, "loop_margin_deg"},
+      {[](cge::sim::PresetSettings& s) {
+         s.group_revisits = {3, 3};
+       },
+       "group_revisits"},
+      {[](cge::sim::PresetSettings& s) { s.group_revisits = {9}; }, "group_revisits"},
+      {[](cge::sim::PresetSettings& s) { s.group_distance_m = 0.45; }, "group_distance_m"},
+      {[](cge::sim::PresetSettings& s) { s.group_speed_mps = 0; }, "group_speed_mps"},
+      {[](cge::sim::PresetSettings& s) { s.group_spacing_m = 2; }, "group_spacing_m"},
+      {[](cge::sim::PresetSettings& s) { s.restock_revisit = 1; }, "restock_revisit"},
+      {[](cge::sim::PresetSettings& s) { s.restock_revisit = 9; }, "restock_revisit"},
   };
   for (const Bad& b : bad) {
     cge::sim::PresetSettings settings;

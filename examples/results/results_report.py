@@ -508,6 +508,15 @@ def loop_target(evaluation: dict) -> str:
     return yes_no(precision == 1 and events == 1)
 
 
+def scene_validity(bow_only: dict) -> str:
+    """A loop scene tests what graph entropy adds only when BoW alone misses some revisit while every
+    loop it accepts is right (precision 1, event recall below 1, as the paper's 6/8 and 7/8)."""
+    precision, events = bow_only.get("precision"), bow_only.get("event_recall")
+    if not (is_number(precision) and is_number(events)):
+        return "n/a"
+    return "valid" if precision == 1 and events < 1 else "**not valid**"
+
+
 def paper_loops(preset: str, scoring: str) -> str:
     row = paper.LOOPS.get(preset, {}).get(scoring)
     if row is None:
@@ -566,6 +575,14 @@ def loop_section(ctx: Context) -> list[str]:
                     "event recall", "missed (by reason)", "corrections", "ATE [mm]", "tracked frames",
                     "target (precision 1, event recall 1)",
                     f"precision / recall ({PAPER.replace('real TUM', 'its robot')})"], rows)
+    validity = []
+    for preset in ctx.loop_presets:
+        e = (ctx.loops.get((preset, "bow_only")) or {}).get("loops") or {}
+        validity.append(f"{preset} {scene_validity(e)} (BoW only: precision {num(e.get('precision'), 3)}, "
+                        f"event recall {num(e.get('event_recall'), 3)})")
+    lines += ["Scene validity: a loop scene can show what graph entropy adds only if BoW alone misses some "
+              "revisits there at precision 1 (event recall below 1, as the paper's 6/8 and 7/8): " +
+              "; ".join(validity) + ".", ""]
     lines += loop_settings_used(ctx)
     lines += ["The P-R curves apply a rising threshold to the score that gates each scoring (S_sum, or the "
               "BoW score for BoW only) of the loops the run accepted (`cge_eval loops --curve`); thresholds "

@@ -44,19 +44,17 @@ void apply_temporal_filter(const std::string& text, const std::string& overlap,
     return;
   }
   const std::string not_n_of_m = "--temporal-filter: '" + text + "' is not N/M (e.g. 2/3) or off";
+  // Digits only: std::stoi alone would also take blanks and signs (" 2/3", "+2/3").
+  const auto frame_count = [&](const std::string& digits) {
+    if (digits.empty() || digits.size() > 4 ||
+        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      throw std::invalid_argument(not_n_of_m);
+    return std::stoi(digits);
+  };
   const std::size_t slash = text.find('/');
-  int n = 0, m = 0;
-  std::size_t used_n = 0, used_m = 0;
-  try {
-    if (slash == std::string::npos) throw std::invalid_argument("no slash");
-    n = std::stoi(text.substr(0, slash), &used_n);
-    m = std::stoi(text.substr(slash + 1), &used_m);
-  } catch (const std::exception&) {
-    throw std::invalid_argument(not_n_of_m);
-  }
-  if (used_n != slash || used_m != text.size() - slash - 1) throw std::invalid_argument(not_n_of_m);
-  seg.temporal_filter.min_frames_seen = n;
-  seg.temporal_filter.window_frames = m;
+  if (slash == std::string::npos) throw std::invalid_argument(not_n_of_m);
+  seg.temporal_filter.min_frames_seen = frame_count(text.substr(0, slash));
+  seg.temporal_filter.window_frames = frame_count(text.substr(slash + 1));
   try {
     seg.temporal_filter.validate();
   } catch (const std::invalid_argument& e) {

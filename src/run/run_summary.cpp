@@ -1,19 +1,17 @@
 #include "cge/run/run_summary.hpp"
 
-#include <algorithm>
 #include <stdexcept>
+#include <utility>
 
 #include "cge/metrics/ate.hpp"
+#include "cge/metrics/error_statistics.hpp"
 #include "cge/metrics/rpe.hpp"
 
 namespace cge {
 namespace run {
 
 double median(std::vector<double> values) {
-  if (values.empty()) return 0;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  return values.empty() ? 0.0 : metrics::error_statistics(std::move(values)).median;
 }
 
 DynamicLeak dynamic_leak(const std::vector<slam::FrameRecord>& frames) {

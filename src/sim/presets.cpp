@@ -1,5 +1,6 @@
 #include "cge/sim/presets.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -41,6 +42,9 @@ constexpr double kGlanceArcToDeg = 285;
 // inside the previous one (so the newest hides the older), metres.
 constexpr double kScreenPanelDeg = 20;
 constexpr double kScreenLapStepM = 0.003;
+// loop_dynamic's pair of people is in view from this much of the circle before the place to as much
+// after it, degrees: the place shows through the opening within about 26 of it at the defaults.
+constexpr double kGroupArcDeg = 35;
 
 /// Deterministic random numbers for scene variation (splitmix64; portable, unlike std distributions).
 class Rng {
@@ -164,6 +168,22 @@ void add_monitor(SceneBuilder& b, const Eigen::Vector2d& at_xy, double yaw, cons
   // The display faces -y of the monitor's frame (towards the user).
   const Eigen::Vector3d normal = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::Vector3d(0, -1, 0);
   b.wall_quad(place(at, yaw, 0, -0.0265, centre_z), normal, half_w - 0.02, half_h - 0.02, display, id);
+}
+
+/// A 40-inch tv (0.9 m x 0.55 m, its centre 1.15 m high) on a pole stand, its display facing -x
+/// with its front at x = front_x, the pole at y; it appears at first_frame.
+void add_tv_on_stand(SceneBuilder& b, double front_x, double y, int first_frame) {
+  const std::uint16_t id = b.object("tv");
+  const Material plastic = b.material(Pattern::plain, rgb(0.12, 0.12, 0.13), rgb(0.1, 0.1, 0.1), 0.05);
+  const Material display = b.material(Pattern::screen, rgb(0.25, 0.3, 0.65), rgb(0.7, 0.45, 0.3), 0.07);
+  const double centre_z = 1.15, half_w = 0.45, half_h = 0.275, half_depth = 0.025;
+  const double x = front_x + half_depth;
+  b.box({x, y, centre_z}, {half_depth, half_w, half_h}, 0, plastic, id, first_frame);
+  b.add(make_quad({front_x - 0.0015, y, centre_z}, -Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitY(), half_w - 0.02,
+                  half_h - 0.02, display, id),
+        first_frame);
+  b.add(make_capsule({x + 0.05, y, 0.03}, {x + 0.05, y, centre_z - half_h}, 0.025, plastic, id), first_frame);
+  b.box({x + 0.05, y, 0.015}, {0.2, 0.04, 0.015}, 0, plastic, id, first_frame);
 }
 
 void add_keyboard(SceneBuilder& b, const Eigen::Vector2d& at, double yaw) {
@@ -495,6 +515,9 @@ Eigen::Isometry3d loop_pose(double angle_rad, double radius_m, double glance_deg
   return look_along(eye, forward);
 }
 
+/// Returns to the place the camera films: without a margin the last return is not filmed.
+int loop_revisits(const PresetSettings& s) { return s.loop_margin_deg > 0 ? s.loop_laps : s.loop_laps - 1; }
+
 void validate_preset_settings(const PresetSettings& s) {
   validate_camera(s.camera, "PresetSettings.camera");
   validate_render_settings(s.render);
@@ -538,6 +561,24 @@ void validate_preset_settings(const PresetSettings& s) {
     throw std::invalid_argument("PresetSettings.loop_margin_deg must be in [0, 180]");
   if (!(positive(s.loop_glance_half_arc_deg) && s.loop_glance_half_arc_deg <= 90))
     throw std::invalid_argument("PresetSettings.loop_glance_half_arc_deg must be in (0, 90]");
+  const int revisits = loop_revisits(s);
+  for (std::size_t k = 0; k < s.group_revisits.size(); ++k) {
+    const int r = s.group_revisits[k];
+    if (r < 1 || r > revisits || (k > 0 && r <= s.group_revisits[k - 1]))
+      throw std::invalid_argument("PresetSettings.group_revisits must be strictly increasing, each in [1, " +
+                                  std::to_string(revisits) + "] (got " + std::to_string(r) + ")");
+  }
+  if (!(std::isfinite(s.group_distance_m) && s.group_distance_m >= 0.5 && s.group_distance_m <= 2.2))
+    throw std::invalid_argument("PresetSettings.group_distance_m must be in [0.5, 2.2] metres");
+  if (!(positive(s.group_speed_mps) && s.group_speed_mps <= 1))
+    throw std::invalid_argument("PresetSettings.group_speed_mps must be in (0, 1] m/s");
+  if (!(std::isfinite(s.group_spacing_m) && s.group_spacing_m >= 0.4 && s.group_spacing_m <= 1.2))
+    throw std::invalid_argument("PresetSettings.group_spacing_m must be in [0.4, 1.2] metres");
+  if (!(std::isfinite(s.tv_distance_m) && s.tv_distance_m >= 0.41 && s.tv_distance_m <= 0.45))
+    throw std::invalid_argument("PresetSettings.tv_distance_m must be in [0.41, 0.45] metres");
+  if (s.restock_revisit != 0 && (s.restock_revisit < 2 || s.restock_revisit > s.loop_laps))
+    throw std::invalid_argument("PresetSettings.restock_revisit must be 0 or in [2, loop_laps] (got " +
+                                std::to_string(s.restock_revisit) + ")");
 }
 
 /// Circle angle of frame i, radians: from margin before the place to margin after the laps-th
@@ -605,6 +646,8 @@ PresetSettings repeated_room_loop_settings(int laps) {
   s.crossing_half_length_m = 1.5;
   s.crossing_angle_deg = 0;
   s.crossing_jitter_s = 0;
+  s.group_revisits.clear();
+  s.restock_revisit = 0;
   return s;
 }
 
@@ -686,19 +729,46 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
       const Eigen::Vector2d middle(settings.loop_radius_m + settings.crossing_distance_m, 0);
       const double a = settings.crossing_angle_deg * kDegToRad;
       const Eigen::Vector2d half = settings.crossing_half_length_m * Eigen::Vector2d(std::sin(a), std::cos(a));
-      const int revisits = margin > 0 ? laps : laps - 1;  // without a margin the last return is not filmed
+      const int revisits = loop_revisits(settings);
+      // On the group revisits the pedestrian and a companion walk side by side towards the camera,
+      // radially, passing group_distance_m in front of it when it passes the place; they are in view
+      // from kGroupArcDeg before the place to as much after it (the place shows over less).
+      const double group_half_s = lap_s * kGroupArcDeg / 360.0;
+      const double group_walk_m = settings.group_speed_mps * group_half_s;
+      const double group_x = settings.loop_radius_m + settings.group_distance_m;
+      std::vector<double> group_at;
       for (int lap = 1; lap <= revisits; ++lap) {
         const double sign = (lap % 2 == 1) ? 1.0 : -1.0;
         // Crossings of neighbouring revisits never overlap in short sequences: the jitter is at most
         // a quarter lap, the crossing at most half a lap.
-        const double at = duration_s * (margin + 360.0 * lap) / (360.0 * laps + 2 * margin) +
-                          rng.uniform(-1, 1) * std::min(settings.crossing_jitter_s, 0.2 * lap_s);
+        const double pass_s = duration_s * (margin + 360.0 * lap) / (360.0 * laps + 2 * margin);
+        const double at = pass_s + rng.uniform(-1, 1) * std::min(settings.crossing_jitter_s, 0.2 * lap_s);
+        if (std::find(settings.group_revisits.begin(), settings.group_revisits.end(), lap) !=
+            settings.group_revisits.end()) {
+          // Centred on the pass itself: the pair is in view the whole time the place is.
+          const double side = 0.5 * settings.group_spacing_m;
+          walker.path.push_back({pass_s - group_half_s, {group_x + group_walk_m, -side}});
+          walker.path.push_back({pass_s + group_half_s, {group_x - group_walk_m, -side}});
+          walker.visible_s.emplace_back(pass_s - group_half_s, pass_s + group_half_s);
+          group_at.push_back(pass_s);
+          continue;
+        }
         const Eigen::Vector2d along(half.x(), sign * half.y());  // always away from the camera
         walker.path.push_back({at - crossing_s / 2, middle - along});
         walker.path.push_back({at + crossing_s / 2, middle + along});
         walker.visible_s.emplace_back(at - crossing_s / 2, at + crossing_s / 2);
       }
       spec.people.push_back(walker);
+      if (!group_at.empty()) {
+        Person companion = make_person(builder, Posture::walking);
+        const double side = 0.5 * settings.group_spacing_m;
+        for (const double pass_s : group_at) {
+          companion.path.push_back({pass_s - group_half_s, {group_x + group_walk_m, side}});
+          companion.path.push_back({pass_s + group_half_s, {group_x - group_walk_m, side}});
+          companion.visible_s.emplace_back(pass_s - group_half_s, pass_s + group_half_s);
+        }
+        spec.people.push_back(companion);
+      }
     } else {
       // As in the paper's experiment: two chairs, a laptop and an umbrella appear at the place half a
       // lap in, while the camera looks the other way.
@@ -720,6 +790,17 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
         const Material cloth = builder.material(Pattern::checks, rgb(0.15, 0.2, 0.55), rgb(0.8, 0.75, 0.2), 0.06);
         builder.add(make_capsule({x0 + 0.35, 0.0, 0.05}, {x0 + 0.35, 0.0, 1.1}, 0.015, cloth, umbrella), appear);
         builder.add(make_ellipsoid({x0 + 0.35, 0.0, 1.1}, {0.5, 0.5, 0.18}, 0, cloth, umbrella), appear);
+      }
+      if (settings.restock_revisit > 0) {
+        // Other books on every row of the shelf, a little larger than the old ones and just in front
+        // of them, half a lap before the restock revisit (the camera looks the other way).
+        const int restock = static_cast<int>(std::lround(
+            frames * (margin + 360.0 * (settings.restock_revisit - 1) + 180.0) / (360.0 * laps + 2 * margin)));
+        for (int row = 0; row < 4; ++row) {
+          const double half_h = builder.rng().uniform(0.19, 0.21);
+          add_books(builder, {kHalfX - 0.205, 0, 0.035 + 0.48 * row + half_h}, {0.125, 0.975, half_h}, 0, restock);
+        }
+        add_tv_on_stand(builder, settings.loop_radius_m + settings.tv_distance_m, 0.5 * (-0.35 + 0.4), restock);
       }
     }
     spec.loops = ground_truth_loops(spec.T_world_camera, settings.loops);

@@ -289,6 +289,10 @@ class LoopTarget(unittest.TestCase):
         self.assertEqual(report.loop_target({"precision": 1.0, "event_recall": 0.875}), "**not met**")
         self.assertEqual(report.loop_target({"precision": 0.98, "event_recall": 1.0}), "**not met**")
         self.assertEqual(report.loop_target({"precision": None, "event_recall": 1.0}), "n/a")
+        self.assertEqual(report.scene_validity({"precision": 1.0, "event_recall": 0.75}), "valid")
+        self.assertEqual(report.scene_validity({"precision": 1.0, "event_recall": 1.0}), "**not valid**")
+        self.assertEqual(report.scene_validity({"precision": 0.9, "event_recall": 0.75}), "**not valid**")
+        self.assertEqual(report.scene_validity({}), "n/a")
         self.assertEqual(report.paper_loops("loop_dynamic", "bow_only"), "100 % / 75.0 % (6 TP, 0 FP, 2 FN)")
         self.assertEqual(report.paper_loops("loop_dynamic", "combined"), "not given")
 

@@ -62,7 +62,8 @@ struct RunSummary {
   std::optional<TrajectoryErrors> trajectory_errors;
 };
 
-/// The median of `values` (0 when empty).
+/// The median of `values`: 0 when empty, otherwise metrics::error_statistics' median (which
+/// refuses non-finite values with std::invalid_argument).
 double median(std::vector<double> values);
 
 DynamicLeak dynamic_leak(const std::vector<slam::FrameRecord>& frames);
