@@ -2,8 +2,10 @@
 // and 1000 matched map points, 1 px noise scaled by the ORB octave, 10 % gross outliers, a start
 // 0.05 rad / 5 cm off), pose-graph optimisation of 100 keyframes (sequential, covisibility and loop
 // edges with noise, started from chained odometry), and global bundle adjustment of 30 keyframes x
-// 1000 points (pixel + depth observations, 1 px / 1 cm noise, perturbed start). Each iteration
-// solves from the same start; scene generation is outside the timed loop.
+// 1000 points (pixel + depth observations, 1 px / 1 cm noise, perturbed start), and the pipeline's
+// local bundle adjustment with its own settings on a window of the real fr1/rpy slice's size (11
+// free keyframes, 10 fixed observers, 1500 points, about 9000 observations, 5 % gross outliers).
+// Each iteration solves from the same start; scene generation is outside the timed loop.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "cge/ceres.hpp"
+#include "cge/slam/settings.hpp"
 
 namespace {
 
@@ -126,5 +129,62 @@ void BM_Ceres_BundleAdjustment(benchmark::State& state) {
   state.counters["rms_px"] = r.final_rms_px;
 }
 BENCHMARK(BM_Ceres_BundleAdjustment)->Args({30, 1000})->Unit(benchmark::kMillisecond);
+
+// The local BA as the pipeline runs it (slam::LocalMappingSettings' bundle settings: a Huber round
+// and a plain round, dense Schur, their iteration cap), sized as on the real slice (docs/REAL_DATA.md):
+// keyframes along a 0.6 m arc looking at a wall of points 1-4 m away, each point observed by the
+// keyframes that see it (about six), pixel noise by the ORB octave, 1 cm depth noise.
+void BM_Ceres_LocalBundleAdjustment(benchmark::State& state) {
+  std::mt19937 rng(4);
+  const int free_keyframes = static_cast<int>(state.range(0)), fixed_keyframes = 10;
+  const int keyframes = free_keyframes + fixed_keyframes, points = static_cast<int>(state.range(1));
+  const cge::PinholeIntrinsics<double> K;
+  std::vector<Eigen::Isometry3d> truth;
+  for (int i = 0; i < keyframes; ++i) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(0.03 * (i - keyframes / 2), Eigen::Vector3d::UnitY()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(0.03 * i, uniform(rng, -0.02, 0.02), uniform(rng, -0.02, 0.02));
+    truth.push_back(T);
+  }
+  std::vector<Eigen::Vector3d> points_true;
+  for (int j = 0; j < points; ++j) points_true.emplace_back(uniform(rng, -2, 2.6), uniform(rng, -1.5, 1.5), uniform(rng, 1, 4));
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<cge::BundleObservation> observations;
+  for (int i = 0; i < keyframes; ++i) {
+    const Eigen::Isometry3d T_camera_world = truth[i].inverse();
+    for (int j = 0; j < points; ++j) {
+      const Eigen::Vector3d p = T_camera_world * points_true[j];
+      const Eigen::Vector2d px = K.project(p);
+      if (p.z() <= 0 || px.x() < 0 || px.x() > 640 || px.y() < 0 || px.y() > 480) continue;
+      if (unit(rng) > 0.6) continue;  // a keyframe matches 60 % of the points in its view
+      cge::BundleObservation o;
+      o.keyframe = i;
+      o.point = j;
+      o.sigma_px = std::pow(1.2, std::uniform_int_distribution<int>(0, 7)(rng));
+      o.pixel_px = px + o.sigma_px * Eigen::Vector2d(noise(rng), noise(rng));
+      if (unit(rng) < 0.05) o.pixel_px += Eigen::Vector2d(uniform(rng, -40, 40), uniform(rng, -40, 40));
+      o.depth_m = p.z() + 0.01 * noise(rng);
+      o.sigma_depth_m = 0.01;
+      observations.push_back(o);
+    }
+  }
+  std::vector<int> fixed;
+  for (int i = free_keyframes; i < keyframes; ++i) fixed.push_back(i);
+  std::vector<Eigen::Isometry3d> poses = truth;
+  for (int i = 0; i < free_keyframes; ++i) poses[i] = truth[i] * random_motion(rng, 0.003, 0.01);
+  std::vector<Eigen::Vector3d> points_start = points_true;
+  for (Eigen::Vector3d& p : points_start) p += 0.01 * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  const cge::BundleAdjuster adjuster(cge::slam::LocalMappingSettings{}.bundle);
+  cge::BundleAdjustmentResult r;
+  for (auto _ : state) {
+    r = adjuster.adjust(K, poses, points_start, observations, fixed);
+    benchmark::DoNotOptimize(r.points_world_m);
+  }
+  state.counters["observations"] = static_cast<double>(observations.size());
+  state.counters["iterations"] = r.iterations;
+  state.counters["rms_px"] = r.final_rms_px;
+}
+BENCHMARK(BM_Ceres_LocalBundleAdjustment)->Args({11, 1500})->Unit(benchmark::kMillisecond);
 
 }  // namespace
