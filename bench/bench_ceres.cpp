@@ -83,6 +83,44 @@ void BM_Ceres_PoseGraph(benchmark::State& state) {
 }
 BENCHMARK(BM_Ceres_PoseGraph)->Arg(100)->Unit(benchmark::kMillisecond);
 
+// How a synthetic keyframe observes the points in its view (pixel + depth, 1 cm depth noise).
+struct ObservationModel {
+  double matched_fraction = 1.0;  ///< of the points in view, the share observed, (0, 1]
+  bool octave_sigma = false;      ///< pixel sigma 1.2^octave (octave uniform in 0..7), else 1 px
+  double outlier_fraction = 0.0;  ///< observations moved by up to +-40 px, [0, 1)
+};
+
+// Every keyframe's observations of the points in front of it and inside the 640 x 480 image.
+// Draws from `rng` only for the model's options in use, and takes the caller's `noise`, so a scene's
+// later draws (its perturbed start) stay what they were.
+std::vector<cge::BundleObservation> observe(const cge::PinholeIntrinsics<double>& K,
+                                            const std::vector<Eigen::Isometry3d>& T_world_camera,
+                                            const std::vector<Eigen::Vector3d>& points_world, const ObservationModel& model,
+                                            std::mt19937& rng, std::normal_distribution<double>& noise) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<cge::BundleObservation> observations;
+  for (int i = 0; i < static_cast<int>(T_world_camera.size()); ++i) {
+    const Eigen::Isometry3d T_camera_world = T_world_camera[i].inverse();
+    for (int j = 0; j < static_cast<int>(points_world.size()); ++j) {
+      const Eigen::Vector3d p = T_camera_world * points_world[j];
+      const Eigen::Vector2d px = K.project(p);
+      if (p.z() <= 0 || px.x() < 0 || px.x() > 640 || px.y() < 0 || px.y() > 480) continue;
+      if (model.matched_fraction < 1 && unit(rng) > model.matched_fraction) continue;
+      cge::BundleObservation o;
+      o.keyframe = i;
+      o.point = j;
+      if (model.octave_sigma) o.sigma_px = std::pow(1.2, std::uniform_int_distribution<int>(0, 7)(rng));
+      o.pixel_px = px + o.sigma_px * Eigen::Vector2d(noise(rng), noise(rng));
+      if (model.outlier_fraction > 0 && unit(rng) < model.outlier_fraction)
+        o.pixel_px += Eigen::Vector2d(uniform(rng, -40, 40), uniform(rng, -40, 40));
+      o.depth_m = p.z() + 0.01 * noise(rng);
+      o.sigma_depth_m = 0.01;
+      observations.push_back(o);
+    }
+  }
+  return observations;
+}
+
 void BM_Ceres_BundleAdjustment(benchmark::State& state) {
   std::mt19937 rng(3);
   const int keyframes = static_cast<int>(state.range(0)), points = static_cast<int>(state.range(1));
@@ -98,22 +136,7 @@ void BM_Ceres_BundleAdjustment(benchmark::State& state) {
   for (int j = 0; j < points; ++j)
     points_true.emplace_back(uniform(rng, -2, span + 2), uniform(rng, -1.5, 1.5), uniform(rng, 3, 8));
   std::normal_distribution<double> noise(0.0, 1.0);
-  std::vector<cge::BundleObservation> observations;
-  for (int i = 0; i < keyframes; ++i) {
-    const Eigen::Isometry3d T_camera_world = truth[i].inverse();
-    for (int j = 0; j < points; ++j) {
-      const Eigen::Vector3d p = T_camera_world * points_true[j];
-      const Eigen::Vector2d px = K.project(p);
-      if (p.z() <= 0 || px.x() < 0 || px.x() > 640 || px.y() < 0 || px.y() > 480) continue;
-      cge::BundleObservation o;
-      o.keyframe = i;
-      o.point = j;
-      o.pixel_px = px + Eigen::Vector2d(noise(rng), noise(rng));
-      o.depth_m = p.z() + 0.01 * noise(rng);
-      o.sigma_depth_m = 0.01;
-      observations.push_back(o);
-    }
-  }
+  const std::vector<cge::BundleObservation> observations = observe(K, truth, points_true, {}, rng, noise);
   std::vector<Eigen::Isometry3d> poses = truth;
   for (int i = 1; i < keyframes; ++i) poses[i] = truth[i] * random_motion(rng, 0.01, 0.03);
   std::vector<Eigen::Vector3d> points_start = points_true;
@@ -149,26 +172,11 @@ void BM_Ceres_LocalBundleAdjustment(benchmark::State& state) {
   std::vector<Eigen::Vector3d> points_true;
   for (int j = 0; j < points; ++j) points_true.emplace_back(uniform(rng, -2, 2.6), uniform(rng, -1.5, 1.5), uniform(rng, 1, 4));
   std::normal_distribution<double> noise(0.0, 1.0);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  std::vector<cge::BundleObservation> observations;
-  for (int i = 0; i < keyframes; ++i) {
-    const Eigen::Isometry3d T_camera_world = truth[i].inverse();
-    for (int j = 0; j < points; ++j) {
-      const Eigen::Vector3d p = T_camera_world * points_true[j];
-      const Eigen::Vector2d px = K.project(p);
-      if (p.z() <= 0 || px.x() < 0 || px.x() > 640 || px.y() < 0 || px.y() > 480) continue;
-      if (unit(rng) > 0.6) continue;  // a keyframe matches 60 % of the points in its view
-      cge::BundleObservation o;
-      o.keyframe = i;
-      o.point = j;
-      o.sigma_px = std::pow(1.2, std::uniform_int_distribution<int>(0, 7)(rng));
-      o.pixel_px = px + o.sigma_px * Eigen::Vector2d(noise(rng), noise(rng));
-      if (unit(rng) < 0.05) o.pixel_px += Eigen::Vector2d(uniform(rng, -40, 40), uniform(rng, -40, 40));
-      o.depth_m = p.z() + 0.01 * noise(rng);
-      o.sigma_depth_m = 0.01;
-      observations.push_back(o);
-    }
-  }
+  ObservationModel model;
+  model.matched_fraction = 0.6;  // a keyframe matches 60 % of the points in its view
+  model.octave_sigma = true;
+  model.outlier_fraction = 0.05;
+  const std::vector<cge::BundleObservation> observations = observe(K, truth, points_true, model, rng, noise);
   std::vector<int> fixed;
   for (int i = free_keyframes; i < keyframes; ++i) fixed.push_back(i);
   std::vector<Eigen::Isometry3d> poses = truth;
