@@ -150,6 +150,26 @@ TEST_CASE("PoseRefiner stops early when too few inliers remain, and rounds follo
                     Catch::Contains("at least 10"));
 }
 
+TEST_CASE("PoseRefiner with huber_delta 0 runs no robust round: as robust_rounds 0", "[ceres]") {
+  // RobustRoundsSettings: 0 = no robust loss (the bundle adjuster's meaning too). With gross
+  // outliers in the data a Huber round changes the path, so the comparison can tell the two apart.
+  std::mt19937 rng(18);
+  Scene s = make_scene(rng, 200);
+  for (std::size_t i = 0; i < s.observations.size(); i += 7) s.observations[i].pixel_px += Eigen::Vector2d(25, -18);
+  const Eigen::Isometry3d start = s.T_world_camera * random_motion(rng, 0.03, 0.06);
+  PoseRefinementSettings no_width;
+  no_width.huber_delta = 0;
+  PoseRefinementSettings no_robust_round;
+  no_robust_round.robust_rounds = 0;
+  const PoseRefinementResult a = PoseRefiner(no_width).refine(s.K, s.observations, start);
+  const PoseRefinementResult b = PoseRefiner(no_robust_round).refine(s.K, s.observations, start);
+  CHECK(cge_test::bit_identical(a.T_world_camera, b.T_world_camera));
+  CHECK(a.inliers == b.inliers);
+  CHECK(a.initial_cost == b.initial_cost);
+  const PoseRefinementResult robust = PoseRefiner().refine(s.K, s.observations, start);
+  CHECK(robust.initial_cost != a.initial_cost);  // the Huber loss was in play by default
+}
+
 TEST_CASE("PoseRefiner rejects invalid input with a message naming it", "[ceres]") {
   std::mt19937 rng(17);
   const Scene s = make_scene(rng, 20);
@@ -199,6 +219,9 @@ TEST_CASE("PoseRefiner rejects invalid input with a message naming it", "[ceres]
     bad.chi2_threshold_2dof = nan;
     CHECK_THROWS_WITH(PoseRefiner(bad).refine(s.K, s.observations, s.T_world_camera),
                       Catch::Contains("chi2_threshold_2dof"));
+    bad = {};
+    bad.huber_delta = -1;
+    CHECK_THROWS_WITH(PoseRefiner(bad).refine(s.K, s.observations, s.T_world_camera), Catch::Contains("huber_delta"));
     bad = {};
     bad.solver.max_iterations = 0;
     CHECK_THROWS_WITH(PoseRefiner(bad).refine(s.K, s.observations, s.T_world_camera),

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "cge/ceres/reprojection_cost.hpp"
+#include "cge/ceres/robust_rounds.hpp"
 #include "cge/ceres/rgbd_reprojection_cost.hpp"
 #include "cge/ceres/se3_parametrisation.hpp"
 #include "cge/ceres/solver_settings.hpp"
@@ -76,20 +77,9 @@ struct ReprojectionDepthCost {
   }
 };
 
-struct BundleAdjustmentSettings {
-  /// Optimise / re-classify rounds: after each but the last, observations over the chi2 threshold
-  /// sit out the next round (ORB-SLAM2's local BA: 2; 1 = a single plain solve), >= 1.
-  int rounds = 2;
-  /// The first this many rounds use the Huber loss, the rest none (ORB-SLAM2's local BA: 1), 0..rounds.
-  int robust_rounds = 1;
-  /// Huber width on the whitened residual norm, sigma units (ORB-SLAM2: sqrt(5.991)); 0 = none.
-  double huber_delta = 2.4477;
-  /// Pixel-only observation: outlier when chi2 (2 dof) exceeds this after the solve (95 %: 5.991).
-  double chi2_threshold_2dof = 5.991;
-  /// Pixel + depth observation: outlier when chi2 (3 dof) exceeds this (95 %: 7.815).
-  double chi2_threshold_3dof = 7.815;
-  /// A point at or closer than this depth in a camera frame is an outlier there, metres, >= 0.
-  double min_depth_m = 1e-6;
+/// The rounds, loss and outlier test (RobustRoundsSettings: ORB-SLAM2's local BA runs 2 rounds, the
+/// first with the Huber loss) and the solver.
+struct BundleAdjustmentSettings : RobustRoundsSettings {
   /// Ceres iterations and tolerances; sparse Schur (points eliminated) when Ceres has a sparse library.
   CeresSolverSettings solver{100, 1e-10, 1e-12, 1e-12};
   /// Reduced camera system: sparse (global BA, hundreds of keyframes) or dense Schur (a local
@@ -97,17 +87,14 @@ struct BundleAdjustmentSettings {
   /// enough that a dense factorisation beats the sparse set-up).
   bool sparse_schur = true;
 
+  BundleAdjustmentSettings() {
+    rounds = 2;         // ORB-SLAM2's local BA: 2 (1 = a single plain solve)
+    robust_rounds = 1;  // ORB-SLAM2's local BA: 1
+  }
+
   /// Throws std::invalid_argument naming the bad field.
   void validate() const {
-    const auto fail = [](const std::string& what) { throw std::invalid_argument("BundleAdjustmentSettings: " + what); };
-    if (rounds < 1) fail("rounds must be at least 1");
-    if (robust_rounds < 0 || robust_rounds > rounds) fail("robust_rounds must be in [0, rounds]");
-    if (!(std::isfinite(huber_delta) && huber_delta >= 0)) fail("huber_delta must be finite and not negative");
-    if (!(std::isfinite(chi2_threshold_2dof) && chi2_threshold_2dof > 0))
-      fail("chi2_threshold_2dof must be finite and positive");
-    if (!(std::isfinite(chi2_threshold_3dof) && chi2_threshold_3dof > 0))
-      fail("chi2_threshold_3dof must be finite and positive");
-    if (!(std::isfinite(min_depth_m) && min_depth_m >= 0)) fail("min_depth_m must be finite and not negative");
+    validate_rounds("BundleAdjustmentSettings");
     solver.validate("BundleAdjustmentSettings.solver");
   }
 };
@@ -289,7 +276,7 @@ inline int BundleAdjustmentRun::solve_next_slice(int max_iterations) {
   // Elimination order given, not searched for: points first (Schur complement), then poses.
   auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   std::vector<bool> pose_in_problem(poses_.size(), false), point_in_problem(points_.size(), false);
-  const bool robust = round < settings_.robust_rounds && settings_.huber_delta > 0;
+  const bool robust = settings_.robust_in_round(round);
   for (std::size_t k = 0; k < observations_.size(); ++k) {
     if (!active_[k]) continue;
     const BundleObservation& o = observations_[k];
@@ -375,13 +362,12 @@ inline bool BundleAdjustmentRun::is_outlier(const BundleObservation& o, const Ei
   const double e_sq = (intrinsics_.project(p) - o.pixel_px).squaredNorm();
   if (pixel_sq != nullptr) *pixel_sq = e_sq;
   double chi2 = e_sq / (o.sigma_px * o.sigma_px);
-  double threshold = settings_.chi2_threshold_2dof;
-  if (!std::isnan(o.depth_m)) {
+  const bool with_depth = !std::isnan(o.depth_m);
+  if (with_depth) {
     const double e = (p.z() - o.depth_m) / o.sigma_depth_m;
     chi2 += e * e;
-    threshold = settings_.chi2_threshold_3dof;
   }
-  return !(chi2 <= threshold);
+  return !(chi2 <= settings_.chi2_threshold(with_depth));
 }
 
 inline void BundleAdjustmentRun::classify(BundleAdjustmentResult& result) const {

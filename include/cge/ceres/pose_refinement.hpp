@@ -8,7 +8,7 @@
 //     one can come back) is re-classified: outlier when chi2 > chi2_threshold_2dof or the point is not in
 //     front of the camera; outliers are left out of the next round;
 //   - the first `robust_rounds` rounds use a Huber loss of width huber_delta (in sigma units, i.e.
-//     huber_delta * sigma_px pixels), the later ones plain least squares on the inliers;
+//     huber_delta * sigma_px pixels; 0: none), the later ones plain least squares on the inliers;
 //   - an observation with a measured depth (RGB-D: the frame's depth at the keypoint) adds the
 //     whitened depth residual (predicted z - measured z) / sigma_depth_m, making it a 3-dof chi2
 //     (threshold chi2_threshold_3dof). Pixels alone leave a weak mode, a rotation about the scene's
@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "cge/ceres/reprojection_cost.hpp"
+#include "cge/ceres/robust_rounds.hpp"
 #include "cge/ceres/se3_parametrisation.hpp"
 #include "cge/ceres/solver_settings.hpp"
 #include "cge/core/pinhole_intrinsics.hpp"
@@ -67,40 +68,29 @@ struct PoseOnlyReprojectionDepthCost {
   }
 };
 
-struct PoseRefinementSettings {
-  /// Optimise / re-classify rounds (ORB-SLAM2: 4), >= 1.
-  int rounds = 4;
-  /// The first this many rounds use the Huber loss, the rest none (ORB-SLAM2: 2), 0..rounds.
-  int robust_rounds = 2;
-  /// Huber width on the whitened residual norm, sigma units (ORB-SLAM2: sqrt(5.991)), > 0.
-  double huber_delta = 2.4477;
-  /// An observation is an outlier when its chi2 (2 dof) exceeds this (95 %: 5.991), > 0.
-  double chi2_threshold_2dof = 5.991;
-  /// The same for an observation with depth (pixel + depth, 3 dof; 95 %: 7.815), > 0.
-  double chi2_threshold_3dof = 7.815;
+/// The rounds, loss and outlier test (RobustRoundsSettings: ORB-SLAM2's PoseOptimization runs 4
+/// rounds, the first 2 with the Huber loss) and the inlier counts that stop the rounds early.
+struct PoseRefinementSettings : RobustRoundsSettings {
   /// Fewer valid observations than this: refine() throws (ORB-SLAM2: 3), >= 3.
   int min_observations = 3;
   /// Stop before a round that would have fewer inliers than this (ORB-SLAM2: 10), >= 3.
   int min_inliers_to_continue = 10;
-  /// A point at or closer than this depth in the camera frame is an outlier, metres, >= 0.
-  double min_depth_m = 1e-6;
   /// Ceres iterations and tolerances per round (ORB-SLAM2: 10 iterations).
   CeresSolverSettings solver{10, 1e-8, 1e-10, 1e-10};
 
+  PoseRefinementSettings() {
+    rounds = 4;         // ORB-SLAM2: 4
+    robust_rounds = 2;  // ORB-SLAM2: 2
+  }
+
   /// Throws std::invalid_argument naming the bad field.
   void validate() const {
-    const auto fail = [](const std::string& what) { throw std::invalid_argument("PoseRefinementSettings: " + what); };
-    if (rounds < 1) fail("rounds must be at least 1");
-    if (robust_rounds < 0 || robust_rounds > rounds) fail("robust_rounds must be in [0, rounds]");
-    if (!(std::isfinite(huber_delta) && huber_delta > 0)) fail("huber_delta must be finite and positive");
-    if (!(std::isfinite(chi2_threshold_2dof) && chi2_threshold_2dof > 0))
-      fail("chi2_threshold_2dof must be finite and positive");
-    if (!(std::isfinite(chi2_threshold_3dof) && chi2_threshold_3dof > 0))
-      fail("chi2_threshold_3dof must be finite and positive");
-    if (min_observations < 3) fail("min_observations must be at least 3");
-    if (min_inliers_to_continue < 3) fail("min_inliers_to_continue must be at least 3");
-    if (!(std::isfinite(min_depth_m) && min_depth_m >= 0)) fail("min_depth_m must be finite and not negative");
-    solver.validate("PoseRefinementSettings.solver");
+    const std::string owner = "PoseRefinementSettings";
+    validate_rounds(owner);
+    if (min_observations < 3) throw std::invalid_argument(owner + ": min_observations must be at least 3");
+    if (min_inliers_to_continue < 3)
+      throw std::invalid_argument(owner + ": min_inliers_to_continue must be at least 3");
+    solver.validate(owner + ".solver");
   }
 };
 
@@ -152,7 +142,7 @@ class PoseRefiner {
       ceres::HuberLoss huber(settings.huber_delta > 0 ? settings.huber_delta : 1.0);  // any width when unused
       ceres::Problem problem(problem_options());
       pose.add_to(problem);
-      const bool robust = round < settings.robust_rounds;
+      const bool robust = settings.robust_in_round(round);
       for (std::size_t i = 0; i < n; ++i) {
         if (!result.inliers[i]) continue;
         const PoseObservation& o = observations[i];
@@ -223,13 +213,12 @@ class PoseRefiner {
       bool in_front = false;
       double chi2 =
           reprojection_chi2(K, T_camera_world, o.point_world_m, o.pixel_px, o.sigma_px, settings.min_depth_m, in_front);
-      double threshold = settings.chi2_threshold_2dof;
-      if (!std::isnan(o.depth_m)) {
+      const bool with_depth = !std::isnan(o.depth_m);
+      if (with_depth) {
         const double e = ((T_camera_world * o.point_world_m).z() - o.depth_m) / o.sigma_depth_m;
         chi2 += e * e;
-        threshold = settings.chi2_threshold_3dof;
       }
-      const bool inlier = in_front && (!use_chi2 || chi2 <= threshold);
+      const bool inlier = in_front && (!use_chi2 || chi2 <= settings.chi2_threshold(with_depth));
       result.inliers[i] = inlier;
       result.inlier_count += inlier ? 1 : 0;
     }
