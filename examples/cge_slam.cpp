@@ -224,6 +224,11 @@ int main(int argc, char** argv) {
                  "local BA iterations solved per frame, across its rounds, restarting from the current estimate "
                  "(0: whole rounds, --local-ba-rounds-per-frame; other values change the trajectory)")
       ->check(CLI::Range(0, 1000));
+  app.add_option("--local-ba-solver", opt.local_ba_solver,
+                 "local BA solver: ceres, or schur_lm (cge's own Levenberg-Marquardt with the points eliminated by "
+                 "the Schur complement; same problem, rounds and tolerances)")
+      ->check(CLI::IsMember({"ceres", "schur_lm"}))
+      ->capture_default_str();
   app.add_option("--orb-spread", opt.orb_spread,
                  "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")
       ->check(CLI::Range(1, 8));

@@ -93,15 +93,28 @@ void perturb(std::mt19937& rng, BAScene& s, std::vector<Eigen::Isometry3d>& pose
     p += Eigen::Vector3d(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)) * 0.05;
 }
 
+/// Default settings with the given solver; every BundleAdjuster test below runs on both backends.
+BundleAdjustmentSettings with_backend(cge::BundleAdjustmentBackend backend) {
+  BundleAdjustmentSettings settings;
+  settings.backend = backend;
+  return settings;
+}
+
+const char* backend_name(cge::BundleAdjustmentBackend backend) {
+  return backend == cge::BundleAdjustmentBackend::ceres ? "ceres" : "schur_lm";
+}
+
 }  // namespace
 
 TEST_CASE("BundleAdjuster recovers poses and points from noise-free pixels (two keyframes fixed)", "[ceres]") {
+  const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
+  CAPTURE(backend_name(backend));
   std::mt19937 rng(31);
   BAScene s = make_ba_scene(rng, 6, 150, false);
   std::vector<Eigen::Isometry3d> poses;
   std::vector<Eigen::Vector3d> points;
   perturb(rng, s, poses, points, {0, 1});  // pixels alone leave the scale free: two fixed poses fix it
-  const BundleAdjustmentResult r = BundleAdjuster().adjust(s.K, poses, points, s.observations, {0, 1});
+  const BundleAdjustmentResult r = BundleAdjuster(with_backend(backend)).adjust(s.K, poses, points, s.observations, {0, 1});
   for (std::size_t i = 0; i < poses.size(); ++i) {
     CAPTURE(i);
     CHECK(rotation_error_rad(r.T_world_camera[i], s.T_world_camera[i]) < 1e-6);
@@ -119,12 +132,14 @@ TEST_CASE("BundleAdjuster recovers poses and points from noise-free pixels (two 
 }
 
 TEST_CASE("BundleAdjuster with depth observations recovers the truth with only the first keyframe fixed", "[ceres]") {
+  const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
+  CAPTURE(backend_name(backend));
   std::mt19937 rng(32);
   BAScene s = make_ba_scene(rng, 5, 120, true);
   std::vector<Eigen::Isometry3d> poses;
   std::vector<Eigen::Vector3d> points;
   perturb(rng, s, poses, points, {0});
-  const BundleAdjustmentResult r = BundleAdjuster().adjust(s.K, poses, points, s.observations);
+  const BundleAdjustmentResult r = BundleAdjuster(with_backend(backend)).adjust(s.K, poses, points, s.observations);
   for (std::size_t i = 0; i < poses.size(); ++i) {
     CAPTURE(i);
     CHECK(rotation_error_rad(r.T_world_camera[i], s.T_world_camera[i]) < 1e-6);
@@ -135,6 +150,8 @@ TEST_CASE("BundleAdjuster with depth observations recovers the truth with only t
 }
 
 TEST_CASE("BundleAdjuster on noisy pixels: cost no worse than the truth's, RMS at the noise level", "[ceres]") {
+  const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
+  CAPTURE(backend_name(backend));
   std::mt19937 rng(33);
   BAScene s = make_ba_scene(rng, 8, 300, false);
   std::normal_distribution<double> noise(0.0, 1.0);
@@ -148,7 +165,7 @@ TEST_CASE("BundleAdjuster on noisy pixels: cost no worse than the truth's, RMS a
   std::vector<Eigen::Isometry3d> poses;
   std::vector<Eigen::Vector3d> points;
   perturb(rng, s, poses, points, {0, 1});
-  BundleAdjustmentSettings settings;
+  BundleAdjustmentSettings settings = with_backend(backend);
   settings.rounds = 1;         // one plain least-squares solve over every observation, so that the optimum's
   settings.robust_rounds = 0;  // cost is comparable with the truth's
   const BundleAdjustmentResult r = BundleAdjuster(settings).adjust(s.K, poses, points, s.observations, {0, 1});
@@ -171,6 +188,8 @@ TEST_CASE("BundleAdjuster on noisy pixels: cost no worse than the truth's, RMS a
 }
 
 TEST_CASE("BundleAdjuster flags exactly the injected gross errors on otherwise exact data", "[ceres]") {
+  const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
+  CAPTURE(backend_name(backend));
   std::mt19937 rng(34);
   BAScene s = make_ba_scene(rng, 6, 200, true);
   // One observation of every third point seen by at least 4 keyframes (with fewer, the point itself
@@ -190,7 +209,7 @@ TEST_CASE("BundleAdjuster flags exactly the injected gross errors on otherwise e
   std::vector<Eigen::Isometry3d> poses;
   std::vector<Eigen::Vector3d> points;
   perturb(rng, s, poses, points, {0});
-  const BundleAdjustmentResult r = BundleAdjuster().adjust(s.K, poses, points, s.observations);
+  const BundleAdjustmentResult r = BundleAdjuster(with_backend(backend)).adjust(s.K, poses, points, s.observations);
   REQUIRE(r.outliers.size() == s.observations.size());
   int expected = 0;
   for (std::size_t k = 0; k < corrupted.size(); ++k) {
@@ -206,6 +225,8 @@ TEST_CASE("BundleAdjuster flags exactly the injected gross errors on otherwise e
 }
 
 TEST_CASE("BundleAdjuster leaves out and flags observations behind their camera at the start", "[ceres]") {
+  const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
+  CAPTURE(backend_name(backend));
   std::mt19937 rng(35);
   BAScene s = make_ba_scene(rng, 4, 60, true);
   std::vector<Eigen::Vector3d> points = s.points;
@@ -213,13 +234,15 @@ TEST_CASE("BundleAdjuster leaves out and flags observations behind their camera 
   points.emplace_back(0.0, 0.0, -3.0);
   s.observations.push_back({0, static_cast<int>(points.size()) - 1, Eigen::Vector2d(320, 240), 1.0,
                             std::numeric_limits<double>::quiet_NaN(), 0.0});
-  const BundleAdjustmentResult r = BundleAdjuster().adjust(s.K, s.T_world_camera, points, s.observations);
+  const BundleAdjustmentResult r = BundleAdjuster(with_backend(backend)).adjust(s.K, s.T_world_camera, points, s.observations);
   CHECK(r.outliers.back());
   CHECK(r.outlier_count == 1);
   CHECK(r.points_world_m.back() == points.back());  // unobserved in the solve: returned as given
 }
 
 TEST_CASE("BundleAdjuster is deterministic: two runs give bit-identical results", "[ceres]") {
+  const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
+  CAPTURE(backend_name(backend));
   std::mt19937 rng(36);
   BAScene s = make_ba_scene(rng, 6, 200, true);
   std::normal_distribution<double> noise(0.0, 1.0);
@@ -227,8 +250,8 @@ TEST_CASE("BundleAdjuster is deterministic: two runs give bit-identical results"
   std::vector<Eigen::Isometry3d> poses;
   std::vector<Eigen::Vector3d> points;
   perturb(rng, s, poses, points, {0});
-  const BundleAdjustmentResult a = BundleAdjuster().adjust(s.K, poses, points, s.observations);
-  const BundleAdjustmentResult b = BundleAdjuster().adjust(s.K, poses, points, s.observations);
+  const BundleAdjustmentResult a = BundleAdjuster(with_backend(backend)).adjust(s.K, poses, points, s.observations);
+  const BundleAdjustmentResult b = BundleAdjuster(with_backend(backend)).adjust(s.K, poses, points, s.observations);
   for (std::size_t i = 0; i < poses.size(); ++i)
     CHECK(cge_test::bit_identical(a.T_world_camera[i], b.T_world_camera[i]));
   bool points_identical = true;
@@ -341,6 +364,8 @@ TEST_CASE("RgbdReprojectionCost equals the autodiff residuals and Jacobians", "[
 }
 
 TEST_CASE("BundleAdjustmentRun: rounds solved one at a time give exactly what adjust gives", "[ceres]") {
+  const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
+  CAPTURE(backend_name(backend));
   std::mt19937 rng(41);
   BAScene s = make_ba_scene(rng, 6, 150, true);
   // Gross pixel errors, so that the first round's outliers sit out the second.
@@ -348,7 +373,7 @@ TEST_CASE("BundleAdjustmentRun: rounds solved one at a time give exactly what ad
   std::vector<Eigen::Isometry3d> poses;
   std::vector<Eigen::Vector3d> points;
   perturb(rng, s, poses, points, {0});
-  const BundleAdjustmentSettings settings;  // two rounds, the first robust
+  const BundleAdjustmentSettings settings = with_backend(backend);  // two rounds, the first robust
   const BundleAdjustmentResult whole = BundleAdjuster(settings).adjust(s.K, poses, points, s.observations, {0});
 
   cge::BundleAdjustmentRun run(settings, s.K, poses, points, s.observations, {0});
@@ -383,13 +408,15 @@ TEST_CASE("BundleAdjustmentRun: rounds solved one at a time give exactly what ad
 
 TEST_CASE("BundleAdjustmentRun in slices: no slice over its limit, a round within its budget, the same optimum",
           "[ceres][slices]") {
+  const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
+  CAPTURE(backend_name(backend));
   std::mt19937 rng(43);
   BAScene s = make_ba_scene(rng, 6, 150, true);
   for (std::size_t k = 0; k < s.observations.size(); k += 17) s.observations[k].pixel_px += Eigen::Vector2d(40, -25);
   std::vector<Eigen::Isometry3d> poses;
   std::vector<Eigen::Vector3d> points;
   perturb(rng, s, poses, points, {0});
-  BundleAdjustmentSettings settings;  // two rounds, the first robust, 100 iterations each
+  BundleAdjustmentSettings settings = with_backend(backend);  // two rounds, the first robust, 100 iterations each
   const BundleAdjustmentResult whole = BundleAdjuster(settings).adjust(s.K, poses, points, s.observations, {0});
   REQUIRE(whole.converged);
 
@@ -428,12 +455,14 @@ TEST_CASE("BundleAdjustmentRun in slices: no slice over its limit, a round withi
 
 TEST_CASE("BundleAdjustmentRun in slices: a round ends at its iteration budget; a slice past it is cut",
           "[ceres][slices]") {
+  const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
+  CAPTURE(backend_name(backend));
   std::mt19937 rng(44);
   BAScene s = make_ba_scene(rng, 5, 120, true);
   std::vector<Eigen::Isometry3d> poses;
   std::vector<Eigen::Vector3d> points;
   perturb(rng, s, poses, points, {0});
-  BundleAdjustmentSettings settings;
+  BundleAdjustmentSettings settings = with_backend(backend);
   settings.solver.max_iterations = 3;
   settings.solver.function_tolerance = 0;  // no early convergence: every round spends its budget
   settings.solver.gradient_tolerance = 0;

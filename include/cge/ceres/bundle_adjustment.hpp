@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -26,6 +27,7 @@
 #include "cge/ceres/reprojection_cost.hpp"
 #include "cge/ceres/robust_rounds.hpp"
 #include "cge/ceres/rgbd_reprojection_cost.hpp"
+#include "cge/ceres/schur_lm_solver.hpp"
 #include "cge/ceres/se3_parametrisation.hpp"
 #include "cge/ceres/solver_settings.hpp"
 #include "cge/core/pinhole_intrinsics.hpp"
@@ -77,6 +79,9 @@ struct ReprojectionDepthCost {
   }
 };
 
+/// Which solver a bundle adjustment runs (BundleAdjustmentSettings::backend).
+enum class BundleAdjustmentBackend { ceres, schur_lm };
+
 /// The rounds, loss and outlier test (RobustRoundsSettings: ORB-SLAM2's local BA runs 2 rounds, the
 /// first with the Huber loss) and the solver.
 struct BundleAdjustmentSettings : RobustRoundsSettings {
@@ -86,6 +91,10 @@ struct BundleAdjustmentSettings : RobustRoundsSettings {
   /// window of a few dozen keyframes, whose reduced system of 6 unknowns per keyframe is small
   /// enough that a dense factorisation beats the sparse set-up).
   bool sparse_schur = true;
+  /// The solver: Ceres (with solver's options and sparse_schur), or cge's own Schur-complement
+  /// Levenberg-Marquardt (schur_lm_solver.hpp: the same problem, rounds, iteration budget and
+  /// tolerances, dense reduced system; for local windows, where Ceres' per-block overhead dominates).
+  BundleAdjustmentBackend backend = BundleAdjustmentBackend::ceres;
 
   BundleAdjustmentSettings() {
     rounds = 2;         // ORB-SLAM2's local BA: 2 (1 = a single plain solve)
@@ -149,6 +158,16 @@ class BundleAdjustmentRun {
   bool is_outlier(const BundleObservation& o, const Eigen::Isometry3d& T_camera_world,
                   const Eigen::Vector3d& point_world, double* pixel_sq) const;
   void classify(BundleAdjustmentResult& result) const;
+  /// What one backend's solve of a slice gives the round bookkeeping.
+  struct SliceOutcome {
+    int iterations = 0;
+    double initial_cost = 0, final_cost = 0;
+    bool converged = false;            ///< a tolerance was reached (or no step could lower the cost)
+    bool hit_iteration_limit = false;  ///< stopped by the slice's iteration limit
+  };
+  /// One slice of the current round over the active observations, at most `slice_limit` iterations.
+  SliceOutcome solve_slice_ceres(bool robust, int slice_limit);
+  SliceOutcome solve_slice_schur_lm(bool robust, int slice_limit);
 
   BundleAdjustmentSettings settings_;
   PinholeIntrinsics<double> intrinsics_;
@@ -270,58 +289,33 @@ inline int BundleAdjustmentRun::solve_next_slice(int max_iterations) {
   const int round = result_.rounds;
   const int budget_left = settings_.solver.max_iterations - round_iterations_;
   const int slice_limit = max_iterations < budget_left ? max_iterations : budget_left;
-  // One loss shared by every residual; it outlives the problem, which does not own it.
-  ceres::HuberLoss huber(settings_.huber_delta > 0 ? settings_.huber_delta : 1.0);  // any width when unused
-  ceres::Problem problem(problem_options());
-  // Elimination order given, not searched for: points first (Schur complement), then poses.
-  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-  std::vector<bool> pose_in_problem(poses_.size(), false), point_in_problem(points_.size(), false);
-  const bool robust = settings_.robust_in_round(round);
+  bool any_active = false;
   for (std::size_t k = 0; k < observations_.size(); ++k) {
     if (!active_[k]) continue;
-    const BundleObservation& o = observations_[k];
-    SE3Block& pose = poses_[o.keyframe];
-    if (!pose_in_problem[o.keyframe]) {
-      pose.add_to(problem, fixed_[o.keyframe]);
-      ordering->AddElementToGroup(pose.q_xyzw.data(), 1);
-      ordering->AddElementToGroup(pose.t.data(), 1);
-      pose_in_problem[o.keyframe] = true;
-      used_pose_[o.keyframe] = true;
-    }
-    if (!point_in_problem[o.point]) {
-      ordering->AddElementToGroup(points_[o.point].data(), 0);
-      point_in_problem[o.point] = true;
-    }
-    used_point_[o.point] = true;
-    const bool has_depth = !std::isnan(o.depth_m);
-    problem.AddResidualBlock(new RgbdReprojectionCost(intrinsics_, o.pixel_px, 1.0 / o.sigma_px,
-                                                      has_depth ? o.depth_m : 0.0,
-                                                      has_depth ? 1.0 / o.sigma_depth_m : 0.0, settings_.min_depth_m),
-                             robust ? &huber : nullptr, pose.q_xyzw.data(), pose.t.data(), points_[o.point].data());
+    any_active = true;
+    used_pose_[static_cast<std::size_t>(observations_[k].keyframe)] = true;
+    used_point_[static_cast<std::size_t>(observations_[k].point)] = true;
   }
-  if (problem.NumResidualBlocks() == 0) {
+  if (!any_active) {
     if (round == 0) result_.converged = true;  // nothing to optimise
     finished_ = true;
     return 0;
   }
-  ceres::Solver::Options options = settings_.solver.options(/*sparse=*/settings_.sparse_schur, /*schur=*/true);
-  options.max_num_iterations = slice_limit;
-  options.linear_solver_ordering = ordering;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  const int used = static_cast<int>(summary.iterations.size()) - 1;
-  if (round_iterations_ == 0) round_initial_cost_ = summary.initial_cost;
-  if (round == 0 && round_iterations_ == 0) result_.initial_cost = summary.initial_cost;
+  const SliceOutcome outcome = settings_.backend == BundleAdjustmentBackend::schur_lm
+                                   ? solve_slice_schur_lm(settings_.robust_in_round(round), slice_limit)
+                                   : solve_slice_ceres(settings_.robust_in_round(round), slice_limit);
+  const int used = outcome.iterations;
+  if (round_iterations_ == 0) round_initial_cost_ = outcome.initial_cost;
+  if (round == 0 && round_iterations_ == 0) result_.initial_cost = outcome.initial_cost;
   round_iterations_ += used;
-  result_.final_cost = summary.final_cost;
+  result_.final_cost = outcome.final_cost;
   result_.iterations += used;
   // A slice stopped by its own limit, with the round's budget not spent, leaves the round open.
-  const bool hit_slice_limit = summary.termination_type == ceres::NO_CONVERGENCE && used >= slice_limit;
+  const bool hit_slice_limit = outcome.hit_iteration_limit && used >= slice_limit;
   if (hit_slice_limit && round_iterations_ < settings_.solver.max_iterations) return used;
   result_.rounds = round + 1;
   result_.converged =
-      summary.termination_type == ceres::CONVERGENCE ||
-      (summary.termination_type == ceres::NO_CONVERGENCE && summary.final_cost >= round_initial_cost_);
+      outcome.converged || (outcome.hit_iteration_limit && outcome.final_cost >= round_initial_cost_);
   round_iterations_ = 0;
   if (result_.rounds == settings_.rounds) {
     finished_ = true;
@@ -336,6 +330,74 @@ inline int BundleAdjustmentRun::solve_next_slice(int max_iterations) {
     active_[k] = !is_outlier(o, T_camera_world[o.keyframe], points_[o.point], nullptr);
   }
   return used;
+}
+
+inline BundleAdjustmentRun::SliceOutcome BundleAdjustmentRun::solve_slice_ceres(bool robust, int slice_limit) {
+  // One loss shared by every residual; it outlives the problem, which does not own it.
+  ceres::HuberLoss huber(settings_.huber_delta > 0 ? settings_.huber_delta : 1.0);  // any width when unused
+  ceres::Problem problem(problem_options());
+  // Elimination order given, not searched for: points first (Schur complement), then poses.
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  std::vector<bool> pose_in_problem(poses_.size(), false), point_in_problem(points_.size(), false);
+  for (std::size_t k = 0; k < observations_.size(); ++k) {
+    if (!active_[k]) continue;
+    const BundleObservation& o = observations_[k];
+    SE3Block& pose = poses_[o.keyframe];
+    if (!pose_in_problem[o.keyframe]) {
+      pose.add_to(problem, fixed_[o.keyframe]);
+      ordering->AddElementToGroup(pose.q_xyzw.data(), 1);
+      ordering->AddElementToGroup(pose.t.data(), 1);
+      pose_in_problem[o.keyframe] = true;
+    }
+    if (!point_in_problem[o.point]) {
+      ordering->AddElementToGroup(points_[o.point].data(), 0);
+      point_in_problem[o.point] = true;
+    }
+    const bool has_depth = !std::isnan(o.depth_m);
+    problem.AddResidualBlock(new RgbdReprojectionCost(intrinsics_, o.pixel_px, 1.0 / o.sigma_px,
+                                                      has_depth ? o.depth_m : 0.0,
+                                                      has_depth ? 1.0 / o.sigma_depth_m : 0.0, settings_.min_depth_m),
+                             robust ? &huber : nullptr, pose.q_xyzw.data(), pose.t.data(), points_[o.point].data());
+  }
+  ceres::Solver::Options options = settings_.solver.options(/*sparse=*/settings_.sparse_schur, /*schur=*/true);
+  options.max_num_iterations = slice_limit;
+  options.linear_solver_ordering = ordering;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  SliceOutcome outcome;
+  outcome.iterations = std::max(0, static_cast<int>(summary.iterations.size()) - 1);
+  outcome.initial_cost = summary.initial_cost;
+  outcome.final_cost = summary.final_cost;
+  outcome.converged = summary.termination_type == ceres::CONVERGENCE;
+  outcome.hit_iteration_limit = summary.termination_type == ceres::NO_CONVERGENCE;
+  return outcome;
+}
+
+inline BundleAdjustmentRun::SliceOutcome BundleAdjustmentRun::solve_slice_schur_lm(bool robust, int slice_limit) {
+  std::vector<SchurLMObservation> residuals;
+  residuals.reserve(observations_.size());
+  for (std::size_t k = 0; k < observations_.size(); ++k) {
+    if (!active_[k]) continue;
+    const BundleObservation& o = observations_[k];
+    SchurLMObservation r;
+    r.pose = o.keyframe;
+    r.point = o.point;
+    r.pixel_px = o.pixel_px;
+    r.inv_sigma_px = 1.0 / o.sigma_px;
+    const bool has_depth = !std::isnan(o.depth_m);
+    r.depth_m = has_depth ? o.depth_m : 0.0;
+    r.inv_sigma_depth = has_depth ? 1.0 / o.sigma_depth_m : 0.0;
+    residuals.push_back(r);
+  }
+  SchurLMSolver solver(intrinsics_, settings_.solver, robust ? settings_.huber_delta : 0.0, settings_.min_depth_m);
+  const SchurLMSummary summary = solver.solve(poses_, fixed_, points_, residuals, slice_limit);
+  SliceOutcome outcome;
+  outcome.iterations = summary.iterations;
+  outcome.initial_cost = summary.initial_cost;
+  outcome.final_cost = summary.final_cost;
+  outcome.converged = summary.termination == SchurLMSummary::Termination::converged;
+  outcome.hit_iteration_limit = summary.termination == SchurLMSummary::Termination::iteration_limit;
+  return outcome;
 }
 
 inline BundleAdjustmentResult BundleAdjustmentRun::result() const {
