@@ -57,10 +57,10 @@ TEST_CASE("run settings: the System's settings from the options", "[run][setting
   opt.keyframe_interval = 7;
   opt.semantic_change_frames = 3;
   opt.local_ba_iterations_per_frame = 4;
-  opt.local_ba_solver = "schur_lm";
+  opt.local_ba_solver = "ceres";
   const cge::slam::SystemSettings s = cge::run::system_settings_from(opt);
-  CHECK(s.local_mapping.bundle.backend == cge::BundleAdjustmentBackend::schur_lm);
-  CHECK(defaults.local_mapping.bundle.backend == cge::BundleAdjustmentBackend::ceres);
+  CHECK(s.local_mapping.bundle.backend == cge::BundleAdjustmentBackend::ceres);
+  CHECK(defaults.local_mapping.bundle.backend == cge::BundleAdjustmentBackend::schur_lm);
   CHECK(s.local_mapping.ba_iterations_per_frame == 4);
   CHECK(defaults.local_mapping.ba_iterations_per_frame == 0);  // whole rounds unless asked
   CHECK(s.patch_keyframes.interval_frames == 7);
