@@ -201,6 +201,22 @@ TEST_CASE("LoopCorrection moves a loop edge off a culled keyframe to its live pa
   CHECK(m.map.map_point(m.points[5][0]).position_world == bad_point_before);
 }
 
+TEST_CASE("LoopCorrection leaves out a loop whose ends were culled into one keyframe", "[slam][loop_correction]") {
+  LoopMap m = drifted_loop(kLoopTruth, kDrift, 2);
+  const Eigen::Isometry3d T_3_5 = translation(kLoopTruth[3]).inverse() * translation(kLoopTruth[5]);
+  const Eigen::Isometry3d T_0_5 = translation(kLoopTruth[0]).inverse() * translation(kLoopTruth[5]);
+  m.map.cull_keyframe(5, 4);
+  m.map.cull_keyframe(3, 4);  // the loop 3 -> 5 now joins keyframe 4 to itself
+  cge::slam::LoopCorrection correction(translation_only_pose_graph(), kIntrinsics, kOrbScale);
+  correction.add_loop({3, 5, T_3_5});
+  correction.add_loop({0, 5, T_0_5});
+  const cge::slam::LoopCorrectionReport report = correction.correct(m.map, 5);
+  CHECK(report.live_keyframes == 4);
+  CHECK(report.loop_edges == 1);  // 0 -> 5, moved to 0 -> 4
+  CHECK(report.collapsed_loop_edges == 1);
+  for (int k : {0, 1, 2, 4}) CHECK(m.map.keyframe(k).T_world_camera.matrix().allFinite());
+}
+
 TEST_CASE("LoopCorrection with global BA returns drifted keyframes and points to the truth",
           "[slam][loop_correction]") {
   // Five cameras on a sideways dolly, all seeing 40 shared points (exact pixels and depths); each

@@ -84,6 +84,10 @@ std::vector<PoseGraphEdge> LoopCorrection::pose_graph_edges(const Map& map, cons
   for (const LoopEdge& e : loop_edges_) {
     // An end culled since: the edge moves to its live ancestor, through the current relative pose.
     const int match = live_ancestor(map, e.match_keyframe), query = live_ancestor(map, e.query_keyframe);
+    if (match == query) {  // both ends culled into one keyframe: the edge no longer constrains anything
+      ++report.collapsed_loop_edges;
+      continue;
+    }
     if (match == e.match_keyframe && query == e.query_keyframe) {
       add_edge(match, query, e.T_match_query);
     } else {

@@ -39,7 +39,9 @@ struct LoopCorrectionReport {
   int live_keyframes = 0;      ///< pose-graph nodes
   int sequential_edges = 0;    ///< between consecutive live keyframes
   int covisibility_edges = 0;  ///< between covisible, non-consecutive live keyframes
-  int loop_edges = 0;          ///< every accepted loop so far
+  int loop_edges = 0;          ///< every accepted loop so far whose ends are still two live keyframes
+  /// Accepted loops left out because keyframe culling merged both ends into one live keyframe.
+  int collapsed_loop_edges = 0;
   bool bundle_adjusted = false;  ///< the global BA ran (enabled and some point seen twice)
   int bundle_points = 0;         ///< points in the global BA
   /// Old world coordinates to corrected ones, as the query keyframe (its live ancestor when culled)
