@@ -220,6 +220,12 @@ TEST_CASE("validate_person and validate_primitive: bad input names the field", "
   q = box;
   q.first_frame = -1;
   CHECK_THAT(primitive_message(q), Catch::Contains("first_frame"));
+  q = box;
+  q.first_frame = 5;
+  q.last_frame = 5;  // one frame
+  CHECK_NOTHROW(cge::sim::validate_primitive(q, "wall"));
+  q.last_frame = 4;
+  CHECK_THAT(primitive_message(q), Catch::Contains("last_frame"));
   // A quad needs no thickness.
   CHECK_NOTHROW(cge::sim::validate_primitive(
       cge::sim::make_quad({0, 0, 0}, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX(), 1, 2, m), "floor"));

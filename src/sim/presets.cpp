@@ -45,6 +45,10 @@ constexpr double kScreenLapStepM = 0.003;
 // loop_dynamic's pair of people is in view from this much of the circle before the place to as much
 // after it, degrees: the place shows through the opening within about 26 of it at the defaults.
 constexpr double kGroupArcDeg = 35;
+// loop_dynamic's counters: depth of the box (metres) and the least gap between its back and the
+// pair's centres (a torso's half depth and a little more), so that the pair stops behind it.
+constexpr double kCounterDepthM = 0.08;
+constexpr double kCounterToPairM = 0.15;
 
 /// Deterministic random numbers for scene variation (splitmix64; portable, unlike std distributions).
 class Rng {
@@ -574,6 +578,13 @@ void validate_preset_settings(const PresetSettings& s) {
     throw std::invalid_argument("PresetSettings.group_speed_mps must be in (0, 1] m/s");
   if (!(std::isfinite(s.group_spacing_m) && s.group_spacing_m >= 0.4 && s.group_spacing_m <= 1.2))
     throw std::invalid_argument("PresetSettings.group_spacing_m must be in [0.4, 1.2] metres");
+  if (!(s.group_counter_distance_m == 0 ||
+        (std::isfinite(s.group_counter_distance_m) && s.group_counter_distance_m >= 0.42 &&
+         s.group_counter_distance_m <= s.group_distance_m - 0.25)))
+    throw std::invalid_argument(
+        "PresetSettings.group_counter_distance_m must be 0 or in [0.42, group_distance_m - 0.25] metres");
+  if (!(std::isfinite(s.group_counter_height_m) && s.group_counter_height_m >= 0.9 && s.group_counter_height_m <= 1.15))
+    throw std::invalid_argument("PresetSettings.group_counter_height_m must be in [0.9, 1.15] metres");
   if (!(std::isfinite(s.tv_distance_m) && s.tv_distance_m >= 0.41 && s.tv_distance_m <= 0.45))
     throw std::invalid_argument("PresetSettings.tv_distance_m must be in [0.41, 0.45] metres");
   if (s.restock_revisit != 0 && (s.restock_revisit < 2 || s.restock_revisit > s.loop_laps))
@@ -630,6 +641,28 @@ void add_lap_screen(SceneBuilder& b, const PresetSettings& s, int lap, int first
         make_quad(centre + Eigen::Vector3d(0, 0, kRoomHeight / 2), inward, Eigen::Vector3d::UnitZ().cross(inward),
                   radius * std::sin(0.5 * step) + 0.01, kRoomHeight / 2 - 0.002, m);
     b.add(p, first_frame);
+  }
+}
+
+/// loop_dynamic's counter of one group revisit: a thin box across the screen's opening, its front
+/// group_counter_distance_m from the camera at the place, as wide as the opening there (seen from
+/// the circle it covers the opening's whole width), with a new poster on its front. It exists from
+/// first_frame to last_frame only.
+void add_group_counter(SceneBuilder& b, const PresetSettings& s, int first_frame, int last_frame) {
+  const double front = s.loop_radius_m + s.group_counter_distance_m;
+  const double half_y = front * std::tan(s.loop_screen_opening_deg * kDegToRad);
+  const double top = s.group_counter_height_m;
+  Rng& r = b.rng();
+  Primitive body = make_box({front + 0.5 * kCounterDepthM, 0, 0.5 * top}, {0.5 * kCounterDepthM, half_y, 0.5 * top}, 0,
+                            b.material(Pattern::noise, rgb(0.55, 0.45, 0.35), rgb(0.35, 0.28, 0.2), 0.03));
+  const Material poster =
+      b.material(Pattern::blocks, rgb(r.uniform(0.6, 0.95), r.uniform(0.6, 0.95), r.uniform(0.6, 0.95)),
+                 rgb(r.uniform(0.05, 0.45), r.uniform(0.05, 0.45), r.uniform(0.05, 0.45)), r.uniform(0.04, 0.06));
+  Primitive front_poster = make_quad({front - 0.0015, 0, 0.5 * top}, -Eigen::Vector3d::UnitX(),
+                                     -Eigen::Vector3d::UnitY(), half_y - 0.01, 0.5 * top - 0.01, poster);
+  for (Primitive* p : {&body, &front_poster}) {
+    p->last_frame = last_frame;
+    b.add(*p, first_frame);
   }
 }
 
@@ -736,6 +769,12 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
       const double group_half_s = lap_s * kGroupArcDeg / 360.0;
       const double group_walk_m = settings.group_speed_mps * group_half_s;
       const double group_x = settings.loop_radius_m + settings.group_distance_m;
+      // Where the pair's walk ends: behind the counter when there is one.
+      const double group_near_x =
+          settings.group_counter_distance_m > 0
+              ? std::max(group_x - group_walk_m,
+                         settings.loop_radius_m + settings.group_counter_distance_m + kCounterDepthM + kCounterToPairM)
+              : group_x - group_walk_m;
       std::vector<double> group_at;
       for (int lap = 1; lap <= revisits; ++lap) {
         const double sign = (lap % 2 == 1) ? 1.0 : -1.0;
@@ -748,7 +787,7 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
           // Centred on the pass itself: the pair is in view the whole time the place is.
           const double side = 0.5 * settings.group_spacing_m;
           walker.path.push_back({pass_s - group_half_s, {group_x + group_walk_m, -side}});
-          walker.path.push_back({pass_s + group_half_s, {group_x - group_walk_m, -side}});
+          walker.path.push_back({pass_s + group_half_s, {group_near_x, -side}});
           walker.visible_s.emplace_back(pass_s - group_half_s, pass_s + group_half_s);
           group_at.push_back(pass_s);
           continue;
@@ -764,10 +803,20 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
         const double side = 0.5 * settings.group_spacing_m;
         for (const double pass_s : group_at) {
           companion.path.push_back({pass_s - group_half_s, {group_x + group_walk_m, side}});
-          companion.path.push_back({pass_s + group_half_s, {group_x - group_walk_m, side}});
+          companion.path.push_back({pass_s + group_half_s, {group_near_x, side}});
           companion.visible_s.emplace_back(pass_s - group_half_s, pass_s + group_half_s);
         }
         spec.people.push_back(companion);
+      }
+      // Drawn last, so that the counters change nothing else of the scene. Each is put up and taken
+      // away half a lap before and after its revisit, while the camera looks the other way.
+      if (settings.group_counter_distance_m > 0) {
+        for (const int lap : settings.group_revisits) {
+          const auto frame_at = [&](double angle_deg) {
+            return static_cast<int>(std::lround(frames * (margin + angle_deg) / (360.0 * laps + 2 * margin)));
+          };
+          add_group_counter(builder, settings, frame_at(360.0 * lap - 180.0), frame_at(360.0 * lap + 180.0));
+        }
       }
     } else {
       // As in the paper's experiment: two chairs, a laptop and an umbrella appear at the place half a

@@ -484,7 +484,7 @@ void SequenceRenderer::collect_primitives(int index, RenderWorkspace& ws) const 
   for (const Person& person : spec_.people) append_person_primitives(person, t, ws.people_primitives);
   ws.frame_primitives.clear();
   for (const Primitive& p : spec_.static_primitives) {
-    if (p.first_frame <= index) ws.frame_primitives.push_back(&p);
+    if (p.first_frame <= index && index <= p.last_frame) ws.frame_primitives.push_back(&p);
   }
   for (const Primitive& p : ws.people_primitives) ws.frame_primitives.push_back(&p);
 }

@@ -65,6 +65,10 @@ void validate_primitive(const Primitive& p, const std::string& where) {
     fail(where, "material colours must be finite");
   }
   if (p.first_frame < 0) fail(where, "first_frame must be >= 0 (got " + std::to_string(p.first_frame) + ")");
+  if (p.last_frame < p.first_frame) {
+    fail(where, "last_frame must be >= first_frame (got " + std::to_string(p.last_frame) + " < " +
+                    std::to_string(p.first_frame) + ")");
+  }
 }
 
 Primitive make_box(const Eigen::Vector3d& centre_m, const Eigen::Vector3d& half_size_m, double yaw_rad,

@@ -8,6 +8,7 @@
 // does (features track like real ones), and people's clothes move with their limbs.
 
 #include <cstdint>
+#include <limits>
 #include <string>
 
 #include <Eigen/Core>
@@ -56,10 +57,13 @@ struct Primitive {
   Material material;
   std::uint16_t instance_id = 0;  ///< InstanceInfo::id, or 0 for the background (walls, shelves, ...)
   int first_frame = 0;            ///< the primitive exists from this frame on (objects added mid-sequence)
+  /// ... up to and including this frame (objects taken away mid-sequence); the default: to the end.
+  int last_frame = std::numeric_limits<int>::max();
 };
 
 /// Throws std::invalid_argument naming `where` (e.g. "static_primitives[3]") when a size, pose or
-/// scale is not finite and positive, the rotation is not orthonormal, or first_frame < 0.
+/// scale is not finite and positive, the rotation is not orthonormal, first_frame < 0 or
+/// last_frame < first_frame.
 void validate_primitive(const Primitive& primitive, const std::string& where);
 
 // ---- construction helpers ----------------------------------------------------------------------
