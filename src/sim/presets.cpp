@@ -657,7 +657,7 @@ void add_group_counter(SceneBuilder& b, const PresetSettings& s, int first_frame
                             b.material(Pattern::noise, rgb(0.55, 0.45, 0.35), rgb(0.35, 0.28, 0.2), 0.03));
   const Material poster =
       b.material(Pattern::blocks, rgb(r.uniform(0.6, 0.95), r.uniform(0.6, 0.95), r.uniform(0.6, 0.95)),
-                 rgb(r.uniform(0.05, 0.45), r.uniform(0.05, 0.45), r.uniform(0.05, 0.45)), r.uniform(0.04, 0.06));
+                 rgb(r.uniform(0.05, 0.45), r.uniform(0.05, 0.45), r.uniform(0.05, 0.45)), r.uniform(0.03, 0.045));
   Primitive front_poster = make_quad({front - 0.0015, 0, 0.5 * top}, -Eigen::Vector3d::UnitX(),
                                      -Eigen::Vector3d::UnitY(), half_y - 0.01, 0.5 * top - 0.01, poster);
   for (Primitive* p : {&body, &front_poster}) {
