@@ -1,7 +1,8 @@
 // Tests of the loop scenes as the paper's robot experiment (cge/sim/presets.hpp, docs/SIMULATION.md):
 // 8 laps after the first visit of the place, each revisit a loop event of its own (the screen and
-// the glances), the pedestrian close in front of the camera at every revisit of loop_dynamic and
-// (when asked for) the pair of people hiding the place over the whole of the group revisits, the objects of
+// the glances), the pedestrian close in front of the camera at the revisits of loop_dynamic, the
+// pair of people and a counter hiding the place over the whole of its group revisits (the counter
+// there only, new each time, in view over the pass), the objects of
 // loop_structure_change absent at the first visit and present at every revisit and the restocked
 // shelf from its revisit on, and determinism. The visits and events are found from the poses and
 // the loop list alone; what a frame shows of the place, from its exact depth.
