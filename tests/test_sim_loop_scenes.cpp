@@ -291,6 +291,13 @@ TEST_CASE("loop_dynamic: a new counter stands in the opening around each group r
       CHECK(upper == 0);
     }
   }
+  // In longer sequences the pair walks further but stops behind the counter (the companion walks
+  // only on the group revisits).
+  const SequenceSpec longer = cge::sim::make_preset("loop_dynamic", 3000, 3);
+  REQUIRE(longer.people.size() == 2);
+  for (const auto& waypoint : longer.people[1].path) {
+    CHECK(waypoint.xy_m.x() >= settings.loop_radius_m + settings.group_counter_distance_m + 0.08 + 0.15 - 1e-9);
+  }
   // Absent at the other revisits and at the first visit.
   for (std::size_t k = 0; k < visits.size(); ++k) {
     if (std::find(settings.group_revisits.begin(), settings.group_revisits.end(), static_cast<int>(k)) !=
