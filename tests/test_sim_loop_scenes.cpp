@@ -168,8 +168,10 @@ TEST_CASE("loop scenes: 8 laps; each revisit of the place is a loop event of its
   }
 }
 
-TEST_CASE("loop_dynamic: the pedestrian is close in front of the camera at the revisits without the pair, not at the first visit",
-          "[sim][presets][loops]") {
+TEST_CASE(
+    "loop_dynamic: the pedestrian is close in front of the camera at the revisits without the pair, not at the first "
+    "visit",
+    "[sim][presets][loops]") {
   const cge::sim::SequenceRenderer r(cge::sim::make_preset("loop_dynamic", kFrames, 3));
   const std::set<int> people = ids_of_class(r.spec(), cge::kCocoPerson);
   REQUIRE(people.size() == 2);  // the pedestrian and, on the group revisits, a companion
