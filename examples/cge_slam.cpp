@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
                  "map maintenance after each keyframe: 'all', 'none' or a comma list of cull_points, triangulate, "
                  "fuse, cull_keyframes");
   app.add_option("--local-ba-iterations", opt.local_ba_iterations,
-                 "Ceres iterations per round of the local BA (its time budget per keyframe; 2 rounds)")
+                 "Levenberg-Marquardt iterations per round of the local BA (its time budget per keyframe; 2 rounds)")
       ->check(CLI::Range(1, 1000));
   app.add_option("--local-ba-rounds-per-frame", opt.local_ba_rounds_per_frame,
                  "local BA rounds solved per frame: 1 solves the first in the keyframe's frame and the second "
@@ -240,6 +240,11 @@ int main(int argc, char** argv) {
   app.add_option("--semantic-change-frames", opt.semantic_change_frames,
                  "mode YMK: consecutive frames a semantic change must hold before it inserts a keyframe")
       ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  app.add_option("--semantic-instances", opt.semantic_instances,
+                 "mode YMK: instances the keyframe rule's semantic change and centroid count: all (the paper) or "
+                 "dynamic (only dynamic classes, people by default)")
+      ->check(CLI::IsMember({"all", "dynamic"}))
       ->capture_default_str();
   app.add_option("--out", opt.out, "output folder; must not exist or be empty, unless --force")->required();
   app.add_flag("--map", opt.map,

@@ -386,6 +386,29 @@ TEST_CASE("make_frame_summary counts keypoints and keeps every instance centre",
           std::string::npos);
 }
 
+TEST_CASE("make_frame_summary with dynamic_instances_only keeps only dynamic instances' centres", "[keyframe][summary]") {
+  const Image image = make_image(640, 480);
+  const std::vector<P> kps{P(1, 1), P(400, 300)};
+  std::vector<cge::SemanticInstance<double>> instances(3);
+  instances[0].centre_px = P(50, 60);
+  instances[0].dynamic = true;
+  instances[1].centre_px = P(500, 400);  // a static object: a chair, say
+  instances[1].class_id = 56;
+  instances[2].centre_px = P(300, 200);
+  instances[2].dynamic = true;
+  cge::PatchKeyframeSettings<double> settings = settings42();
+  settings.dynamic_instances_only = true;
+  const Summary s = Selector(settings).summarise(7, image, kps, instances, 10);
+  REQUIRE(s.instance_centres_px == std::vector<P>{P(50, 60), P(300, 200)});
+  // So static objects coming into view change neither Num_cur nor the centroid.
+  instances[1].centre_px = P(600, 20);
+  instances.push_back(instances[1]);
+  const Summary more_static = Selector(settings).summarise(8, image, kps, instances, 10);
+  REQUIRE(more_static.instance_centres_px == s.instance_centres_px);
+  settings.dynamic_instances_only = false;
+  REQUIRE(Selector(settings).summarise(8, image, kps, instances, 10).instance_count() == 4);
+}
+
 // =============================================================================================
 // PatchKeyframeSelector rules
 // =============================================================================================
