@@ -88,9 +88,7 @@ inline nlohmann::ordered_json slam_summary_json(const cge::run::SlamRun& run) {
                            {"local_ba_iterations", used.local_mapping.bundle.solver.max_iterations},
                            {"local_ba_rounds_per_frame", used.local_mapping.ba_rounds_per_frame},
                            {"local_ba_iterations_per_frame", used.local_mapping.ba_iterations_per_frame},
-                           {"local_ba_solver", used.local_mapping.bundle.backend == cge::BundleAdjustmentBackend::schur_lm
-                                                   ? "schur_lm"
-                                                   : "ceres"},
+                           {"local_ba_solver", cge::bundle_adjustment_backend_name(used.local_mapping.bundle.backend)},
                            {"map_maintenance", opt.map_maintenance},
                            {"loop_correction", opt.loop_correction}};
   const cge::run::DynamicLeak& leak = s.dynamic_leak;

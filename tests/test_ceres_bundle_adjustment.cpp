@@ -100,15 +100,11 @@ BundleAdjustmentSettings with_backend(cge::BundleAdjustmentBackend backend) {
   return settings;
 }
 
-const char* backend_name(cge::BundleAdjustmentBackend backend) {
-  return backend == cge::BundleAdjustmentBackend::ceres ? "ceres" : "schur_lm";
-}
-
 }  // namespace
 
 TEST_CASE("BundleAdjuster recovers poses and points from noise-free pixels (two keyframes fixed)", "[ceres]") {
   const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
-  CAPTURE(backend_name(backend));
+  CAPTURE(cge::bundle_adjustment_backend_name(backend));
   std::mt19937 rng(31);
   BAScene s = make_ba_scene(rng, 6, 150, false);
   std::vector<Eigen::Isometry3d> poses;
@@ -133,7 +129,7 @@ TEST_CASE("BundleAdjuster recovers poses and points from noise-free pixels (two 
 
 TEST_CASE("BundleAdjuster with depth observations recovers the truth with only the first keyframe fixed", "[ceres]") {
   const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
-  CAPTURE(backend_name(backend));
+  CAPTURE(cge::bundle_adjustment_backend_name(backend));
   std::mt19937 rng(32);
   BAScene s = make_ba_scene(rng, 5, 120, true);
   std::vector<Eigen::Isometry3d> poses;
@@ -151,7 +147,7 @@ TEST_CASE("BundleAdjuster with depth observations recovers the truth with only t
 
 TEST_CASE("BundleAdjuster on noisy pixels: cost no worse than the truth's, RMS at the noise level", "[ceres]") {
   const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
-  CAPTURE(backend_name(backend));
+  CAPTURE(cge::bundle_adjustment_backend_name(backend));
   std::mt19937 rng(33);
   BAScene s = make_ba_scene(rng, 8, 300, false);
   std::normal_distribution<double> noise(0.0, 1.0);
@@ -189,7 +185,7 @@ TEST_CASE("BundleAdjuster on noisy pixels: cost no worse than the truth's, RMS a
 
 TEST_CASE("BundleAdjuster flags exactly the injected gross errors on otherwise exact data", "[ceres]") {
   const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
-  CAPTURE(backend_name(backend));
+  CAPTURE(cge::bundle_adjustment_backend_name(backend));
   std::mt19937 rng(34);
   BAScene s = make_ba_scene(rng, 6, 200, true);
   // One observation of every third point seen by at least 4 keyframes (with fewer, the point itself
@@ -226,7 +222,7 @@ TEST_CASE("BundleAdjuster flags exactly the injected gross errors on otherwise e
 
 TEST_CASE("BundleAdjuster leaves out and flags observations behind their camera at the start", "[ceres]") {
   const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
-  CAPTURE(backend_name(backend));
+  CAPTURE(cge::bundle_adjustment_backend_name(backend));
   std::mt19937 rng(35);
   BAScene s = make_ba_scene(rng, 4, 60, true);
   std::vector<Eigen::Vector3d> points = s.points;
@@ -242,7 +238,7 @@ TEST_CASE("BundleAdjuster leaves out and flags observations behind their camera 
 
 TEST_CASE("BundleAdjuster is deterministic: two runs give bit-identical results", "[ceres]") {
   const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
-  CAPTURE(backend_name(backend));
+  CAPTURE(cge::bundle_adjustment_backend_name(backend));
   std::mt19937 rng(36);
   BAScene s = make_ba_scene(rng, 6, 200, true);
   std::normal_distribution<double> noise(0.0, 1.0);
@@ -365,7 +361,7 @@ TEST_CASE("RgbdReprojectionCost equals the autodiff residuals and Jacobians", "[
 
 TEST_CASE("BundleAdjustmentRun: rounds solved one at a time give exactly what adjust gives", "[ceres]") {
   const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
-  CAPTURE(backend_name(backend));
+  CAPTURE(cge::bundle_adjustment_backend_name(backend));
   std::mt19937 rng(41);
   BAScene s = make_ba_scene(rng, 6, 150, true);
   // Gross pixel errors, so that the first round's outliers sit out the second.
@@ -409,7 +405,7 @@ TEST_CASE("BundleAdjustmentRun: rounds solved one at a time give exactly what ad
 TEST_CASE("BundleAdjustmentRun in slices: no slice over its limit, a round within its budget, the same optimum",
           "[ceres][slices]") {
   const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
-  CAPTURE(backend_name(backend));
+  CAPTURE(cge::bundle_adjustment_backend_name(backend));
   std::mt19937 rng(43);
   BAScene s = make_ba_scene(rng, 6, 150, true);
   for (std::size_t k = 0; k < s.observations.size(); k += 17) s.observations[k].pixel_px += Eigen::Vector2d(40, -25);
@@ -456,7 +452,7 @@ TEST_CASE("BundleAdjustmentRun in slices: no slice over its limit, a round withi
 TEST_CASE("BundleAdjustmentRun in slices: a round ends at its iteration budget; a slice past it is cut",
           "[ceres][slices]") {
   const cge::BundleAdjustmentBackend backend = GENERATE(cge::BundleAdjustmentBackend::ceres, cge::BundleAdjustmentBackend::schur_lm);
-  CAPTURE(backend_name(backend));
+  CAPTURE(cge::bundle_adjustment_backend_name(backend));
   std::mt19937 rng(44);
   BAScene s = make_ba_scene(rng, 5, 120, true);
   std::vector<Eigen::Isometry3d> poses;

@@ -606,6 +606,12 @@ int pass_frame(int pass, int frames, int laps, double margin_deg) {
   return static_cast<int>(std::ceil(fraction * frames - 1e-9));
 }
 
+/// The frame nearest to where the camera is `angle_deg` of the circle past its first visit of the
+/// place (360: the first return).
+int frame_at_angle(double angle_deg, int frames, int laps, double margin_deg) {
+  return static_cast<int>(std::lround(frames * (margin_deg + angle_deg) / (360.0 * laps + 2 * margin_deg)));
+}
+
 /// How far up the camera looks at circle angle `angle_deg` on lap `lap` (lap k runs from pass k-1
 /// to pass k), degrees. Laps 2 .. laps glance once, each at a centre of its own; a raised cosine over
 /// +-half_arc around it.
@@ -812,16 +818,14 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
       // away half a lap before and after its revisit, while the camera looks the other way.
       if (settings.group_counter_distance_m > 0) {
         for (const int lap : settings.group_revisits) {
-          const auto frame_at = [&](double angle_deg) {
-            return static_cast<int>(std::lround(frames * (margin + angle_deg) / (360.0 * laps + 2 * margin)));
-          };
-          add_group_counter(builder, settings, frame_at(360.0 * lap - 180.0), frame_at(360.0 * lap + 180.0));
+          add_group_counter(builder, settings, frame_at_angle(360.0 * lap - 180.0, frames, laps, margin),
+                            frame_at_angle(360.0 * lap + 180.0, frames, laps, margin));
         }
       }
     } else {
       // As in the paper's experiment: two chairs, a laptop and an umbrella appear at the place half a
       // lap in, while the camera looks the other way.
-      const int appear = static_cast<int>(std::lround(frames * (margin + 180.0) / (360.0 * laps + 2 * margin)));
+      const int appear = frame_at_angle(180.0, frames, laps, margin);
       const double x0 = settings.loop_radius_m + settings.added_objects_distance_m;  // the chairs' line
       add_chair(builder, {x0, -0.35}, kPi / 2 + rng.uniform(-0.3, 0.3), appear);     // facing the camera
       add_chair(builder, {x0 + 0.05, 0.4}, kPi / 2 + rng.uniform(-0.3, 0.3), appear);
@@ -843,8 +847,7 @@ SequenceSpec make_preset(const std::string& name, int frames, std::uint64_t seed
       if (settings.restock_revisit > 0) {
         // Other books on every row of the shelf, a little larger than the old ones and just in front
         // of them, half a lap before the restock revisit (the camera looks the other way).
-        const int restock = static_cast<int>(std::lround(
-            frames * (margin + 360.0 * (settings.restock_revisit - 1) + 180.0) / (360.0 * laps + 2 * margin)));
+        const int restock = frame_at_angle(360.0 * (settings.restock_revisit - 1) + 180.0, frames, laps, margin);
         for (int row = 0; row < 4; ++row) {
           const double half_h = builder.rng().uniform(0.19, 0.21);
           add_books(builder, {kHalfX - 0.205, 0, 0.035 + 0.48 * row + half_h}, {0.125, 0.975, half_h}, 0, restock);

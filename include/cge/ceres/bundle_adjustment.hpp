@@ -82,6 +82,11 @@ struct ReprojectionDepthCost {
 /// Which solver a bundle adjustment runs (BundleAdjustmentSettings::backend).
 enum class BundleAdjustmentBackend { ceres, schur_lm };
 
+/// "ceres" or "schur_lm": the backend's name on the command line and in summary.json.
+inline const char* bundle_adjustment_backend_name(BundleAdjustmentBackend backend) {
+  return backend == BundleAdjustmentBackend::schur_lm ? "schur_lm" : "ceres";
+}
+
 /// The rounds, loss and outlier test (RobustRoundsSettings: ORB-SLAM2's local BA runs 2 rounds, the
 /// first with the Huber loss) and the solver.
 struct BundleAdjustmentSettings : RobustRoundsSettings {

@@ -18,6 +18,26 @@
 
 namespace cge {
 
+/// The whitened residual of an observation at camera-frame point p (p.z > 0): ((u - u_obs) /
+/// sigma_px, (v - v_obs) / sigma_px, (p.z - depth) / sigma_depth, or 0 when inv_sigma_depth is 0),
+/// and, when J_p is given, its derivative d r / d p. Shared by RgbdReprojectionCost (Ceres) and
+/// SchurLMSolver, so that both backends minimise the same function.
+inline Eigen::Vector3d rgbd_whitened_residual(const PinholeIntrinsics<double>& K, const Eigen::Vector2d& pixel_px,
+                                              double inv_sigma_px, double depth_m, double inv_sigma_depth,
+                                              const Eigen::Vector3d& p, Eigen::Matrix3d* J_p = nullptr) {
+  const double inv_z = 1.0 / p.z();
+  const Eigen::Vector3d r((K.fx_px * p.x() * inv_z + K.cx_px - pixel_px.x()) * inv_sigma_px,
+                          (K.fy_px * p.y() * inv_z + K.cy_px - pixel_px.y()) * inv_sigma_px,
+                          inv_sigma_depth != 0.0 ? (p.z() - depth_m) * inv_sigma_depth : 0.0);
+  if (J_p != nullptr) {
+    const double su = K.fx_px * inv_z * inv_sigma_px, sv = K.fy_px * inv_z * inv_sigma_px;
+    *J_p << su, 0.0, -su * p.x() * inv_z,  //
+        0.0, sv, -sv * p.y() * inv_z,      //
+        0.0, 0.0, inv_sigma_depth;
+  }
+  return r;
+}
+
 class RgbdReprojectionCost final : public ceres::SizedCostFunction<3, 4, 3, 3> {
  public:
   /// inv_sigma_depth = 0: a pixel-only observation (the depth row is 0 with zero derivatives).
@@ -41,18 +61,11 @@ class RgbdReprojectionCost final : public ceres::SizedCostFunction<3, 4, 3, 3> {
     const Eigen::Vector3d vx = v.cross(X);
     const Eigen::Vector3d p = X + 2.0 * w * vx + 2.0 * v.cross(vx) + t;
     if (!(p.z() > min_depth_m_)) return false;
-    const double inv_z = 1.0 / p.z();
-    residuals[0] = (K_.fx_px * p.x() * inv_z + K_.cx_px - pixel_px_.x()) * inv_sigma_px_;
-    residuals[1] = (K_.fy_px * p.y() * inv_z + K_.cy_px - pixel_px_.y()) * inv_sigma_px_;
-    residuals[2] = inv_sigma_depth_ != 0.0 ? (p.z() - depth_m_) * inv_sigma_depth_ : 0.0;
+    Eigen::Matrix3d J_p;  // d residual / d p (3 x 3), whitened
+    Eigen::Map<Eigen::Vector3d> r(residuals);
+    r = rgbd_whitened_residual(K_, pixel_px_, inv_sigma_px_, depth_m_, inv_sigma_depth_, p,
+                               jacobians != nullptr ? &J_p : nullptr);
     if (jacobians == nullptr) return true;
-
-    // d residual / d p (3 x 3), whitened.
-    Eigen::Matrix3d J_p;
-    const double su = K_.fx_px * inv_z * inv_sigma_px_, sv = K_.fy_px * inv_z * inv_sigma_px_;
-    J_p << su, 0.0, -su * p.x() * inv_z,  //
-        0.0, sv, -sv * p.y() * inv_z,     //
-        0.0, 0.0, inv_sigma_depth_;
     if (jacobians[0] != nullptr) {
       // d p / d v = -2w [X]x + 2 (v X^T + (v . X) I - 2 X v^T);  d p / d w = 2 (v x X).
       Eigen::Matrix3d X_hat;

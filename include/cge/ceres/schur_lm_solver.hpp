@@ -29,11 +29,13 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <limits>
 #include <vector>
 
+#include "cge/ceres/rgbd_reprojection_cost.hpp"
 #include "cge/ceres/se3_parametrisation.hpp"
 #include "cge/ceres/solver_settings.hpp"
 #include "cge/core/pinhole_intrinsics.hpp"
@@ -80,12 +82,10 @@ class SchurLMSolver {
   bool cost(const std::vector<Eigen::Matrix3d>& R, const std::vector<SE3Block>& poses,
             const std::vector<Eigen::Vector3d>& points, const std::vector<SchurLMObservation>& observations,
             double* total) const;
-  /// Residual of one observation at p = R X + t (camera frame).
-  Eigen::Vector3d residual(const SchurLMObservation& o, const Eigen::Vector3d& p) const {
-    const double inv_z = 1.0 / p.z();
-    return Eigen::Vector3d((K_.fx_px * p.x() * inv_z + K_.cx_px - o.pixel_px.x()) * o.inv_sigma_px,
-                           (K_.fy_px * p.y() * inv_z + K_.cy_px - o.pixel_px.y()) * o.inv_sigma_px,
-                           o.inv_sigma_depth != 0.0 ? (p.z() - o.depth_m) * o.inv_sigma_depth : 0.0);
+  /// Residual of one observation at p = R X + t (camera frame), and d r / d p when J_p is given.
+  Eigen::Vector3d residual(const SchurLMObservation& o, const Eigen::Vector3d& p,
+                           Eigen::Matrix3d* J_p = nullptr) const {
+    return rgbd_whitened_residual(K_, o.pixel_px, o.inv_sigma_px, o.depth_m, o.inv_sigma_depth, p, J_p);
   }
   /// rho(s) and rho'(s) of the squared residual norm s (Huber, or the identity without one).
   double rho(double s) const {
@@ -227,14 +227,9 @@ inline SchurLMSummary SchurLMSolver::solve(std::vector<SE3Block>& poses, const s
       const std::size_t i = static_cast<std::size_t>(o.pose);
       const Eigen::Vector3d p_rot = R[i] * points[static_cast<std::size_t>(o.point)];
       const Eigen::Vector3d p = p_rot + Eigen::Vector3d(poses[i].t[0], poses[i].t[1], poses[i].t[2]);
-      const Eigen::Vector3d r = residual(o, p);
-      const double w = rho_prime(r.squaredNorm());
-      const double inv_z = 1.0 / p.z();
-      const double su = K_.fx_px * inv_z * o.inv_sigma_px, sv = K_.fy_px * inv_z * o.inv_sigma_px;
       Eigen::Matrix3d J_p;  // d r / d p, whitened
-      J_p << su, 0.0, -su * p.x() * inv_z,  //
-          0.0, sv, -sv * p.y() * inv_z,     //
-          0.0, 0.0, o.inv_sigma_depth;
+      const Eigen::Vector3d r = residual(o, p, &J_p);
+      const double w = rho_prime(r.squaredNorm());
       const Eigen::Matrix3d J_X = J_p * R[i];
       const int j = point_slot[o.point];
       lin.V[static_cast<std::size_t>(j)].noalias() += w * J_X.transpose() * J_X;
@@ -401,12 +396,9 @@ inline SchurLMSummary SchurLMSolver::solve(std::vector<SE3Block>& poses, const s
     const bool successful = valid && model_decrease > 0 && cost_change / model_decrease > 1e-3;
     if (successful || (tolerance_reached && cost_change > 0)) {
       const double ratio = model_decrease > 0 ? cost_change / model_decrease : 0.0;
-      poses.swap(candidate_poses);
-      points.swap(candidate_points);
-      R.swap(candidate_R);
-      candidate_poses = poses;
-      candidate_points = points;
-      candidate_R = R;
+      poses = candidate_poses;
+      points = candidate_points;
+      R = candidate_R;
       current_cost = candidate_cost;
       summary.final_cost = current_cost;
       if (tolerance_reached) {
