@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <utility>
 #include <stdexcept>
 #include <string>
@@ -11,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "cge/core/splitmix64.hpp"
+#include "cge/slam/keypoint_spread.hpp"
 #include "cge/opencv.hpp"
 
 namespace cge {
@@ -34,73 +34,17 @@ FrameMaker::FrameMaker(const SystemSettings& settings, const PinholeIntrinsics<d
   }
 }
 
-namespace {
-
-/// Of each pyramid level's candidates, its share (count / oversampling, rounded) taken cell by
-/// cell: the best response of every cell, then every cell's second best, ... (cells visited by
-/// their best response, ties by candidate order). Keeps the candidates' order otherwise.
-std::vector<cv::KeyPoint> spread_over_cells(const std::vector<cv::KeyPoint>& candidates, int oversampling,
-                                            int cell_px, double scale_factor) {
-  std::map<int, std::vector<int>> by_level;
-  for (int i = 0; i < static_cast<int>(candidates.size()); ++i) {
-    by_level[std::max(candidates[static_cast<std::size_t>(i)].octave, 0)].push_back(i);
-  }
-  std::vector<char> keep(candidates.size(), 0);
-  for (const auto& [level, members] : by_level) {
-    const double cell = cell_px * std::pow(scale_factor, level);
-    std::map<std::pair<int, int>, std::vector<int>> cells;  // (row, col) -> candidates
-    for (const int i : members) {
-      const cv::Point2f& p = candidates[static_cast<std::size_t>(i)].pt;
-      cells[{static_cast<int>(p.y / cell), static_cast<int>(p.x / cell)}].push_back(i);
-    }
-    const auto stronger = [&](int a, int b) {
-      const float ra = candidates[static_cast<std::size_t>(a)].response;
-      const float rb = candidates[static_cast<std::size_t>(b)].response;
-      return ra != rb ? ra > rb : a < b;
-    };
-    std::vector<std::vector<int>> ranked;
-    for (auto& entry : cells) {
-      std::sort(entry.second.begin(), entry.second.end(), stronger);
-      ranked.push_back(std::move(entry.second));
-    }
-    std::sort(ranked.begin(), ranked.end(),
-              [&](const std::vector<int>& a, const std::vector<int>& b) { return stronger(a.front(), b.front()); });
-    const std::size_t quota = (members.size() + static_cast<std::size_t>(oversampling) / 2) /
-                              static_cast<std::size_t>(oversampling);
-    std::size_t taken = 0;
-    for (std::size_t rank = 0; taken < quota; ++rank) {
-      for (const std::vector<int>& cell_members : ranked) {
-        if (rank < cell_members.size() && taken < quota) {
-          keep[static_cast<std::size_t>(cell_members[rank])] = 1;
-          ++taken;
-        }
-      }
-    }
-  }
-  std::vector<cv::KeyPoint> out;
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    if (keep[i]) out.push_back(candidates[i]);
-  }
-  return out;
+cv::Ptr<cv::ORB> FrameMaker::orb(int fast_threshold) const {
+  const OrbSettings& o = settings_.frame.orb;
+  return cv::ORB::create(o.features * o.spread_oversampling, static_cast<float>(o.scale_factor), o.levels,
+                         o.edge_threshold_px, 0, 2, cv::ORB::HARRIS_SCORE, o.patch_size_px, fast_threshold);
 }
 
-}  // namespace
-
-std::vector<cv::KeyPoint> FrameMaker::detect(const cv::Mat& gray, int fast_threshold, cv::Mat& descriptors) const {
+std::vector<cv::KeyPoint> FrameMaker::detect_spread(const cv::Mat& gray, int fast_threshold) const {
   const OrbSettings& o = settings_.frame.orb;
-  const int s = o.spread_oversampling;
-  cv::Ptr<cv::ORB> orb = cv::ORB::create(o.features * s, static_cast<float>(o.scale_factor), o.levels,
-                                         o.edge_threshold_px, 0, 2, cv::ORB::HARRIS_SCORE, o.patch_size_px,
-                                         fast_threshold);
   std::vector<cv::KeyPoint> keypoints;
-  if (s == 1) {
-    orb->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
-    return keypoints;
-  }
-  orb->detect(gray, keypoints);
-  keypoints = spread_over_cells(keypoints, s, o.spread_cell_px, o.scale_factor);
-  orb->compute(gray, keypoints, descriptors);
-  return keypoints;
+  orb(fast_threshold)->detect(gray, keypoints);
+  return spread_over_cells(keypoints, o.spread_oversampling, o.spread_cell_px, o.scale_factor);
 }
 
 Frame FrameMaker::extract(int index, double timestamp_s, const cv::Mat& bgr, const cv::Mat& depth) {
@@ -134,9 +78,22 @@ Frame FrameMaker::extract(int index, double timestamp_s, const cv::Mat& bgr, con
   cv::Mat gray;
   cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
   const OrbSettings& o = settings_.frame.orb;
-  f.keypoints = detect(gray, o.initial_fast_threshold, f.descriptors);
-  if (static_cast<int>(f.keypoints.size()) < o.features && o.min_fast_threshold < o.initial_fast_threshold) {
-    f.keypoints = detect(gray, o.min_fast_threshold, f.descriptors);
+  // A second detection at the lower threshold when the first keeps fewer than `features`.
+  const bool may_retry = o.min_fast_threshold < o.initial_fast_threshold;
+  if (o.spread_oversampling == 1) {
+    orb(o.initial_fast_threshold)->detectAndCompute(gray, cv::noArray(), f.keypoints, f.descriptors);
+    if (static_cast<int>(f.keypoints.size()) < o.features && may_retry) {
+      orb(o.min_fast_threshold)->detectAndCompute(gray, cv::noArray(), f.keypoints, f.descriptors);
+    }
+  } else {
+    int fast_threshold = o.initial_fast_threshold;
+    f.keypoints = detect_spread(gray, fast_threshold);
+    if (static_cast<int>(f.keypoints.size()) < o.features && may_retry) {
+      fast_threshold = o.min_fast_threshold;
+      f.keypoints = detect_spread(gray, fast_threshold);
+    }
+    // Descriptors once, for the keypoints kept (the FAST threshold does not enter them).
+    orb(fast_threshold)->compute(gray, f.keypoints, f.descriptors);
   }
 
   const FrameSettings& fs = settings_.frame;

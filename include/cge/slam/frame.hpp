@@ -85,7 +85,11 @@ class FrameMaker {
   const SystemSettings& settings() const { return settings_; }
 
  private:
-  std::vector<cv::KeyPoint> detect(const cv::Mat& gray, int fast_threshold, cv::Mat& descriptors) const;
+  /// cv::ORB with the settings' pyramid, oversampled feature count and this FAST threshold.
+  cv::Ptr<cv::ORB> orb(int fast_threshold) const;
+  /// ORB keypoints (no descriptors) at one FAST threshold, spread over the image by
+  /// spread_over_cells (spread_oversampling > 1).
+  std::vector<cv::KeyPoint> detect_spread(const cv::Mat& gray, int fast_threshold) const;
 
   SystemSettings settings_;
   PinholeIntrinsics<double> intrinsics_;
