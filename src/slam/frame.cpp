@@ -86,14 +86,12 @@ Frame FrameMaker::extract(int index, double timestamp_s, const cv::Mat& bgr, con
       orb(o.min_fast_threshold)->detectAndCompute(gray, cv::noArray(), f.keypoints, f.descriptors);
     }
   } else {
-    int fast_threshold = o.initial_fast_threshold;
-    f.keypoints = detect_spread(gray, fast_threshold);
+    f.keypoints = detect_spread(gray, o.initial_fast_threshold);
     if (static_cast<int>(f.keypoints.size()) < o.features && may_retry) {
-      fast_threshold = o.min_fast_threshold;
-      f.keypoints = detect_spread(gray, fast_threshold);
+      f.keypoints = detect_spread(gray, o.min_fast_threshold);
     }
     // Descriptors once, for the keypoints kept (the FAST threshold does not enter them).
-    orb(fast_threshold)->compute(gray, f.keypoints, f.descriptors);
+    orb(o.initial_fast_threshold)->compute(gray, f.keypoints, f.descriptors);
   }
 
   const FrameSettings& fs = settings_.frame;
