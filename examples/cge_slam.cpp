@@ -241,6 +241,11 @@ int main(int argc, char** argv) {
                  "mode YMK: consecutive frames a semantic change must hold before it inserts a keyframe")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
+  app.add_option("--coverage-guard-ratio", opt.coverage_guard_ratio,
+                 "mode YMK: insert a keyframe when the close points tracked fall under this fraction of the "
+                 "reference keyframe's (ours, not the paper's; 0: off)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   app.add_option("--semantic-instances", opt.semantic_instances,
                  "mode YMK: instances the keyframe rule's semantic change and centroid count: all (the paper) or "
                  "dynamic (only dynamic classes, people by default)")

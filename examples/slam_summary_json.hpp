@@ -82,6 +82,7 @@ inline nlohmann::ordered_json slam_summary_json(const cge::run::SlamRun& run) {
                            {"reference_min_observations", used.mapping.reference_min_observations},
                            {"keyframe_interval", used.patch_keyframes.interval_frames},
                            {"semantic_change_frames", used.patch_keyframes.semantic_change_frames},
+                           {"coverage_guard_ratio", used.patch_keyframes.coverage_ratio},
                            {"semantic_instances", used.patch_keyframes.dynamic_instances_only ? "dynamic" : "all"},
                            {"keyframe_min_gap", used.orbslam2_keyframes.min_frame_gap},
                            {"orb_spread", used.frame.orb.spread_oversampling},

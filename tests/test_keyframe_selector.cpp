@@ -678,6 +678,66 @@ TEST_CASE("selector: the tracking guard fires under the floor, first in priority
   require_none(off.step(frame(1, kRef, {}, 0)));
 }
 
+Summary with_close(Summary f, int tracked_close, int untracked_close) {
+  f.tracked_close_points = tracked_close;
+  f.untracked_close_points = untracked_close;
+  return f;
+}
+
+TEST_CASE("selector: the coverage guard fires when close points tracked fall under the ratio of the reference's",
+          "[keyframe][rules]") {
+  Settings s = settings42();  // coverage ratio 0.3, more than 70 untracked close points
+  REQUIRE(s.coverage_ratio == 0.3);
+  REQUIRE(s.coverage_min_untracked_close == 70);
+  Selector sel(s);
+  sel.step(with_close(frame(0, kRef, {}, 300), 200, 100));  // reference: 200 close points tracked
+  // 60 = 0.3 x 200 is not under the ratio; 59 with 70 untracked is not over the untracked count.
+  require_none(sel.step(with_close(frame(1, kRef, {}, 300), 60, 500)));
+  require_none(sel.step(with_close(frame(2, kRef, {}, 300), 59, 70)));
+  Decision d = sel.step(with_close(frame(3, kRef, {}, 300), 59, 71));
+  require_insert(d, Rule::coverage_guard, 3);
+  REQUIRE(d.measures.tracked_close_points == 59);
+  REQUIRE(d.measures.untracked_close_points == 71);
+  REQUIRE(d.measures.reference_tracked_close_points == 200);
+  // The new reference tracked 59: 17 < 0.3 x 59 = 17.7 fires, 18 does not.
+  require_none(sel.step(with_close(frame(4, kRef, {}, 300), 18, 400)));
+  require_insert(sel.step(with_close(frame(5, kRef, {}, 300), 17, 400)), Rule::coverage_guard, 5);
+  // After the tracking guard, before the semantic change.
+  require_insert(sel.step(with_close(frame(6, kRef, {}, 10), 0, 400)), Rule::tracking_guard, 6);
+  require_insert(sel.step(with_close(frame(7, kRef, {}, 10), 100, 0)), Rule::tracking_guard, 7);  // 100 close
+  require_insert(sel.step(with_close(frame(8, kRef, {P(1, 1), P(2, 2)}, 300), 10, 400)), Rule::coverage_guard, 8);
+  SECTION("counts not measured (-1) never fire it, in the frame or the reference") {
+    Selector unknown(s);
+    unknown.step(frame(0, kRef, {}, 300));  // the reference did not count close points
+    const Decision u = unknown.step(with_close(frame(1, kRef, {}, 300), 0, 500));
+    require_none(u);
+    REQUIRE(u.measures.reference_tracked_close_points == -1);
+    unknown.step(with_close(frame(2, kRef, {}, 10), 200, 100));  // tracking guard: a counted reference
+    require_none(unknown.step(frame(3, kRef, {}, 300)));
+  }
+  SECTION("switched off, or ratio 0") {
+    Settings off = s;
+    off.use_coverage_guard = false;
+    Settings zero = s;
+    zero.coverage_ratio = 0;
+    for (const Settings& variant : {off, zero}) {
+      Selector o(variant);
+      o.step(with_close(frame(0, kRef, {}, 300), 200, 100));
+      require_none(o.step(with_close(frame(1, kRef, {}, 300), 0, 1000)));
+    }
+  }
+  SECTION("bad settings are refused") {
+    Settings bad = s;
+    bad.coverage_ratio = 1.5;
+    REQUIRE(invalid_argument_message([&] { Selector(bad).step(frame(0, kRef)); }).find("coverage_ratio") !=
+            std::string::npos);
+    bad = s;
+    bad.coverage_min_untracked_close = -1;
+    REQUIRE(invalid_argument_message([&] { Selector(bad).step(frame(0, kRef)); })
+                .find("coverage_min_untracked_close") != std::string::npos);
+  }
+}
+
 TEST_CASE("selector: frames without features", "[keyframe][rules][edge]") {
   SECTION("a featureless frame is never a candidate") {
     Settings s = settings42();
@@ -814,6 +874,8 @@ struct RawFrame {
   std::vector<P> keypoints;
   std::vector<P> instances;
   int tracked;
+  int tracked_close = -1;
+  int untracked_close = -1;
 };
 
 /// A camera panning over a textured canvas with occasional jumps, objects that come and go, and
@@ -852,6 +914,11 @@ std::vector<RawFrame> random_sequence(std::uint32_t seed, int length) {
     }
     f.instances = objects;
     f.tracked = uniform(0, 99) < 3 ? uniform(0, 60) : uniform(80, 400);
+    // Close points: unmeasured now and then; mostly steady, sometimes collapsing as in a fast turn.
+    if (uniform(0, 99) >= 5) {
+      f.tracked_close = uniform(0, 99) < 6 ? uniform(0, 40) : uniform(60, 250);
+      f.untracked_close = uniform(0, 300);
+    }
     frames.push_back(std::move(f));
   }
   return frames;
@@ -864,6 +931,7 @@ struct OracleFeatures {
   std::optional<P> centroid;
   int num;
   bool has_features;
+  int tracked_close;
 };
 
 OracleFeatures oracle_features(const RawFrame& f, const Grid& g, int num_dense) {
@@ -879,6 +947,7 @@ OracleFeatures oracle_features(const RawFrame& f, const Grid& g, int num_dense) 
   }
   o.num = static_cast<int>(f.instances.size());
   o.has_features = !f.keypoints.empty();
+  o.tracked_close = f.tracked_close;
   return o;
 }
 
@@ -916,6 +985,10 @@ std::vector<OracleStep> oracle_run(const std::vector<RawFrame>& frames, const Se
       Rule immediate = Rule::none;
       if (s.use_tracking_guard && frames[j].tracked < s.tracking_floor) {
         immediate = Rule::tracking_guard;
+      } else if (s.use_coverage_guard && frames[j].tracked_close >= 0 && ref.tracked_close > 0 &&
+                 frames[j].untracked_close > s.coverage_min_untracked_close &&
+                 frames[j].tracked_close < s.coverage_ratio * ref.tracked_close) {
+        immediate = Rule::coverage_guard;
       } else if (changed && held >= s.semantic_change_frames) {
         immediate = Rule::semantic_change;
       } else if (s.use_large_motion && candidate && d_sum > s.motion_threshold_px) {
@@ -950,7 +1023,7 @@ std::vector<OracleStep> oracle_run(const std::vector<RawFrame>& frames, const Se
 std::vector<Decision> run(Selector& sel, const std::vector<RawFrame>& frames) {
   std::vector<Decision> out;
   for (const RawFrame& f : frames) {
-    const Summary s = sel.summarise(
+    Summary s = sel.summarise(
         f.id, make_image(640, 480), f.keypoints,
         [&] {
           std::vector<cge::SemanticInstance<double>> inst(f.instances.size());
@@ -958,6 +1031,8 @@ std::vector<Decision> run(Selector& sel, const std::vector<RawFrame>& frames) {
           return inst;
         }(),
         f.tracked);
+    s.tracked_close_points = f.tracked_close;
+    s.untracked_close_points = f.untracked_close;
     out.push_back(sel.step(s));
   }
   out.push_back(sel.flush());
@@ -973,13 +1048,15 @@ bool same_decision(const Decision& a, const Decision& b) {
          x.candidate == y.candidate && x.interval_position == y.interval_position &&
          x.instance_count == y.instance_count && x.reference_instance_count == y.reference_instance_count &&
          x.tracked_points == y.tracked_points && x.reference_tracked_points == y.reference_tracked_points &&
-         x.frames_since_reference == y.frames_since_reference;
+         x.frames_since_reference == y.frames_since_reference && x.tracked_close_points == y.tracked_close_points &&
+         x.untracked_close_points == y.untracked_close_points &&
+         x.reference_tracked_close_points == y.reference_tracked_close_points;
 }
 
 }  // namespace
 
 TEST_CASE("selector matches an offline reference implementation on random sequences", "[keyframe][oracle]") {
-  int fired[8] = {};
+  int fired[16] = {};
   for (std::uint32_t seed = 1; seed <= 12; ++seed) {
     const std::vector<RawFrame> frames = random_sequence(seed, 150);
     Settings s;  // defaults: 10 x 10 grid, k = 10
@@ -988,6 +1065,7 @@ TEST_CASE("selector matches an offline reference implementation on random sequen
     s.use_semantic_change = seed % 7 != 0;
     s.use_candidate_test = seed % 11 != 0;
     s.semantic_change_frames = 1 + static_cast<int>(seed % 3);
+    s.use_coverage_guard = seed % 4 != 0;
     Selector sel(s);
     const std::vector<Decision> got = run(sel, frames);
     const std::vector<OracleStep> expected = oracle_run(frames, s);
@@ -1012,6 +1090,8 @@ TEST_CASE("selector matches an offline reference implementation on random sequen
       sum.patch_counts = brute_counts(sum.grid, f.keypoints);
       sum.instance_centres_px = f.instances;
       sum.tracked_points = f.tracked;
+      sum.tracked_close_points = f.tracked_close;
+      sum.untracked_close_points = f.untracked_close;
       const Decision d = replay.step(sum);
       const std::vector<std::int64_t> pending = replay.pending_ids();
       REQUIRE(pending.size() <= static_cast<std::size_t>(s.interval_frames - 1));
@@ -1020,8 +1100,8 @@ TEST_CASE("selector matches an offline reference implementation on random sequen
     }
   }
   // Every rule of the method fired somewhere, so the comparison above was not vacuous.
-  for (const Rule r : {Rule::first_frame, Rule::tracking_guard, Rule::semantic_change, Rule::large_motion,
-                       Rule::interval_best_candidate, Rule::none}) {
+  for (const Rule r : {Rule::first_frame, Rule::tracking_guard, Rule::coverage_guard, Rule::semantic_change,
+                       Rule::large_motion, Rule::interval_best_candidate, Rule::none}) {
     INFO(cge::to_string(r));
     REQUIRE(fired[static_cast<int>(r)] > 0);
   }
@@ -1042,6 +1122,8 @@ TEST_CASE("selector is deterministic; a copy continues exactly like the original
     Summary s =
         c.summarise(f.id, make_image(640, 480), f.keypoints, std::vector<cge::SemanticInstance<double>>{}, f.tracked);
     s.instance_centres_px = f.instances;
+    s.tracked_close_points = f.tracked_close;
+    s.untracked_close_points = f.untracked_close;
     c.step(s);
   }
   Selector copy = c;

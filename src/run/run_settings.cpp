@@ -94,6 +94,7 @@ slam::SystemSettings system_settings_from(const SlamRunOptions& opt) {
   settings.mapping.reference_min_observations = opt.reference_min_observations;
   settings.patch_keyframes.interval_frames = opt.keyframe_interval;
   settings.patch_keyframes.semantic_change_frames = opt.semantic_change_frames;
+  settings.patch_keyframes.coverage_ratio = opt.coverage_guard_ratio;
   settings.patch_keyframes.dynamic_instances_only = opt.semantic_instances == "dynamic";
   settings.frame.orb.spread_oversampling = opt.orb_spread;
   settings.local_mapping.bundle.solver.max_iterations = opt.local_ba_iterations;

@@ -40,7 +40,7 @@ struct FrameSummary {
   int tracked_points = 0;
   /// Keypoints with a close depth (ORB-SLAM2: closer than ThDepth baselines) that track a map point,
   /// and those that do not; -1 when the host does not count them (the ORB-SLAM2 baseline's
-  /// close-point rule then stays off). Only that baseline reads them.
+  /// close-point rule and the patch policy's coverage guard then stay off).
   int tracked_close_points = -1;
   int untracked_close_points = -1;
 

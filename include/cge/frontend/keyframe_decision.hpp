@@ -19,6 +19,7 @@ enum class KeyframeRule : std::uint8_t {
   tracked_ratio,            ///< ORB-SLAM2 baseline: tracked points under ratio x the reference keyframe's
   max_frame_gap,            ///< ORB-SLAM2 baseline: max_frame_gap frames since the reference keyframe
   close_points,             ///< ORB-SLAM2 baseline: few close points tracked, many untracked
+  coverage_guard,           ///< patch policy: close points tracked fell against the reference's (ours)
 };
 
 /// Stable lower-case name of a rule, for logs and settings files.
@@ -42,6 +43,8 @@ inline const char* to_string(KeyframeRule rule) {
       return "max_frame_gap";
     case KeyframeRule::close_points:
       return "close_points";
+    case KeyframeRule::coverage_guard:
+      return "coverage_guard";
   }
   return "unknown";
 }
@@ -65,6 +68,10 @@ struct KeyframeMeasures {
   int tracked_points = 0;            ///< the frame's tracked map points
   int reference_tracked_points = 0;  ///< the reference keyframe's (see set_reference_tracked_points)
   int frames_since_reference = 0;    ///< steps since the reference keyframe's own step (this one included)
+  // Patch policy's coverage guard (-1: the summary did not count close points).
+  int tracked_close_points = -1;            ///< the frame's tracked close points
+  int untracked_close_points = -1;          ///< the frame's untracked close points
+  int reference_tracked_close_points = -1;  ///< the reference keyframe's tracked close points at its step
 };
 
 template <typename Scalar>

@@ -5,7 +5,8 @@
 // States and transitions (docs/METHOD.md has the reasoning):
 // - No reference yet: the frame becomes the first keyframe (first_frame).
 // - Otherwise the frame is measured against the reference keyframe and counted into the current
-//   interval. Immediate rules, in this priority: tracking_guard, semantic_change, large_motion. One
+//   interval. Immediate rules, in this priority: tracking_guard, coverage_guard, semantic_change,
+//   large_motion. One
 //   firing inserts the current frame, drops the pending candidates (they are older than the new
 //   keyframe and were measured against a superseded reference) and restarts the interval.
 // - Else a candidate is kept pending. When the interval holds k frames, the pending candidate with
@@ -73,6 +74,16 @@ struct PatchKeyframeSettings {
   /// Tracking guard floor: fewer tracked map points than this inserts at once (ours, not the
   /// paper's; ORB-SLAM2 declares tracking lost under 30 inliers, so 50 leaves a margin).
   int tracking_floor = 50;
+  /// Coverage guard (ours, not the paper's): insert at once when the frame tracks fewer than
+  /// coverage_ratio times the close points (FrameSummary::tracked_close_points) its reference
+  /// keyframe tracked at its own step, while more than coverage_min_untracked_close of its close
+  /// points are untracked: the view has turned away from the map faster than the patch rules
+  /// insert. Relative to the reference, not ORB-SLAM2's absolute 100 (measured on the real fr1/rpy
+  /// slice and the rendered presets, docs/REAL_DATA.md item 13: the absolute rule fired on most
+  /// rendered frames, 24 -> 93 keyframes on walking_xyz). In [0, 1]; 0 never fires.
+  double coverage_ratio = 0.3;
+  /// ORB-SLAM2's untracked-close count of its close-point rule (Tracking::NeedNewKeyFrame: 70), >= 0.
+  int coverage_min_untracked_close = 70;
 
   // Rule switches for ablations (all on reproduces the method).
   bool use_candidate_test = true;   ///< off: every frame with features is a candidate
@@ -80,6 +91,7 @@ struct PatchKeyframeSettings {
   bool use_interval_best = true;    ///< interval_best_candidate rule (off: nothing is kept pending)
   bool use_semantic_change = true;  ///< semantic_change rule
   bool use_tracking_guard = true;   ///< tracking_guard rule
+  bool use_coverage_guard = true;   ///< coverage_guard rule (needs the summary's close-point counts)
 
   /// Throws std::invalid_argument naming the bad field.
   void validate() const {
@@ -95,6 +107,8 @@ struct PatchKeyframeSettings {
     if (instance_change_threshold < 1) fail("instance_change_threshold (Num_th) must be at least 1");
     if (semantic_change_frames < 1) fail("semantic_change_frames must be at least 1");
     if (tracking_floor < 0) fail("tracking_floor must not be negative");
+    if (!(coverage_ratio >= 0 && coverage_ratio <= 1)) fail("coverage_ratio must lie in [0, 1]");
+    if (coverage_min_untracked_close < 0) fail("coverage_min_untracked_close must not be negative");
   }
 };
 
@@ -175,8 +189,18 @@ class PatchKeyframeSelector {
                                       settings.instance_change_threshold;
     semantic_change_run_ = semantic_changed ? semantic_change_run_ + 1 : 0;
     m.semantic_change_frames = semantic_change_run_;
+    m.tracked_close_points = cur.tracked_close_points;
+    m.untracked_close_points = cur.untracked_close_points;
+    m.reference_tracked_close_points = ref.tracked_close_points;
+    // Counts of -1 (not measured) never satisfy the comparisons below.
+    const bool coverage_lost = settings.use_coverage_guard && cur.tracked_close_points >= 0 &&
+                               ref.tracked_close_points > 0 &&
+                               cur.untracked_close_points > settings.coverage_min_untracked_close &&
+                               cur.tracked_close_points < settings.coverage_ratio * ref.tracked_close_points;
     if (settings.use_tracking_guard && cur.tracked_points < settings.tracking_floor) {
       d.rule = KeyframeRule::tracking_guard;
+    } else if (coverage_lost) {
+      d.rule = KeyframeRule::coverage_guard;
     } else if (semantic_changed && semantic_change_run_ >= settings.semantic_change_frames) {
       d.rule = KeyframeRule::semantic_change;
     } else if (settings.use_large_motion && m.candidate && m.d_sum > settings.motion_threshold_px) {
@@ -251,6 +275,8 @@ class PatchKeyframeSelector {
     std::optional<Point> centroid;
     int instance_count = 0;
     int tracked_points = 0;
+    int tracked_close_points = -1;    ///< -1: not counted
+    int untracked_close_points = -1;  ///< -1: not counted
     bool has_features = false;
   };
   struct Pending {
@@ -283,6 +309,8 @@ class PatchKeyframeSelector {
     f.centroid = semantic_centroid(frame.instance_centres_px);
     f.instance_count = frame.instance_count();
     f.tracked_points = frame.tracked_points;
+    f.tracked_close_points = frame.tracked_close_points;
+    f.untracked_close_points = frame.untracked_close_points;
     for (const int c : f.z) f.has_features = f.has_features || c > 0;
     return f;
   }
