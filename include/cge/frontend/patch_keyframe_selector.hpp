@@ -6,9 +6,9 @@
 // - No reference yet: the frame becomes the first keyframe (first_frame).
 // - Otherwise the frame is measured against the reference keyframe and counted into the current
 //   interval. Immediate rules, in this priority: tracking_guard, coverage_guard, semantic_change,
-//   large_motion. One
-//   firing inserts the current frame, drops the pending candidates (they are older than the new
-//   keyframe and were measured against a superseded reference) and restarts the interval.
+//   large_motion. One firing inserts the current frame, drops the pending candidates (they are
+//   older than the new keyframe and were measured against a superseded reference) and restarts
+//   the interval.
 // - Else a candidate is kept pending. When the interval holds k frames, the pending candidate with
 //   the highest D_sum (ties: the earliest) is inserted (interval_best_candidate); the others are
 //   dropped, and frames after it are never re-measured against it. The interval restarts.
@@ -81,7 +81,7 @@ struct PatchKeyframeSettings {
   /// insert. Relative to the reference, not ORB-SLAM2's absolute 100 (measured on the real fr1/rpy
   /// slice and the rendered presets, docs/REAL_DATA.md item 13: the absolute rule fired on most
   /// rendered frames, 24 -> 93 keyframes on walking_xyz). In [0, 1]; 0 never fires.
-  double coverage_ratio = 0.3;
+  Scalar coverage_ratio = Scalar(0.3);
   /// ORB-SLAM2's untracked-close count of its close-point rule (Tracking::NeedNewKeyFrame: 70), >= 0.
   int coverage_min_untracked_close = 70;
 
