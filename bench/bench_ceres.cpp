@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "cge/ceres.hpp"
@@ -41,10 +42,18 @@ void BM_Ceres_PoseRefinement(benchmark::State& state) {
     o.sigma_px = std::pow(1.2, std::uniform_int_distribution<int>(0, 7)(rng));
     o.pixel_px = px + o.sigma_px * Eigen::Vector2d(noise(rng), noise(rng));
     if (i % 10 == 0) o.pixel_px += Eigen::Vector2d(uniform(rng, -60, 60), uniform(rng, -60, 60));
+    if (state.range(2) == 1 && i % 2 == 0) {  // RGB-D tracking: a measured depth on half the points
+      o.depth_m = (T_world_camera.inverse() * o.point_world_m).z() * (1 + 0.003 * noise(rng));
+      o.sigma_depth_m = 0.003 * o.depth_m * o.depth_m;
+    }
     observations.push_back(o);
   }
   const Eigen::Isometry3d start = T_world_camera * random_motion(rng, 0.05, 0.05);
-  const cge::PoseRefiner refiner;
+  cge::PoseRefinementSettings settings;
+  settings.backend = state.range(1) == 1 ? cge::PoseRefinementBackend::pose_lm : cge::PoseRefinementBackend::ceres;
+  state.SetLabel(std::string(cge::pose_refinement_backend_name(settings.backend)) +
+                 (state.range(2) == 1 ? ", half with depth" : ", pixels only"));
+  const cge::PoseRefiner refiner(settings);
   int inliers = 0;
   for (auto _ : state) {
     const cge::PoseRefinementResult r = refiner.refine(K, observations, start);
@@ -53,7 +62,10 @@ void BM_Ceres_PoseRefinement(benchmark::State& state) {
   }
   state.counters["inliers"] = inliers;
 }
-BENCHMARK(BM_Ceres_PoseRefinement)->Arg(300)->Arg(1000)->Unit(benchmark::kMillisecond);
+// Args: observations, backend (0 Ceres, 1 the own pose_lm), depth on half the points (0 no, 1 yes).
+BENCHMARK(BM_Ceres_PoseRefinement)
+    ->ArgsProduct({{300, 1000}, {0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond);
 
 void BM_Ceres_PoseGraph(benchmark::State& state) {
   std::mt19937 rng(2);

@@ -229,6 +229,11 @@ int main(int argc, char** argv) {
                  "the Schur complement; same problem, rounds and tolerances)")
       ->check(CLI::IsMember({"ceres", "schur_lm"}))
       ->capture_default_str();
+  app.add_option("--tracking-solver", opt.tracking_solver,
+                 "tracking refinement solver: pose_lm (cge's own 6x6 Levenberg-Marquardt) or ceres; same problem, "
+                 "rounds and tolerances")
+      ->check(CLI::IsMember({"ceres", "pose_lm"}))
+      ->capture_default_str();
   app.add_option("--orb-spread", opt.orb_spread,
                  "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")
       ->check(CLI::Range(1, 8));

@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "cge/ceres/solver_settings.hpp"
 #include "cge/core/pinhole_intrinsics.hpp"
 
 namespace cge_test {
@@ -53,6 +54,16 @@ inline bool bit_identical(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B
     for (int c = 0; c < 4; ++c)
       if (std::memcmp(&A.matrix()(r, c), &B.matrix()(r, c), sizeof(double)) != 0) return false;
   return true;
+}
+
+/// Solver settings tight enough that a solve ends at the optimum to rounding, not at a tolerance.
+inline cge::CeresSolverSettings tight(int iterations) {
+  cge::CeresSolverSettings solver;
+  solver.max_iterations = iterations;
+  solver.function_tolerance = 1e-14;
+  solver.gradient_tolerance = 1e-12;
+  solver.parameter_tolerance = 1e-14;
+  return solver;
 }
 
 }  // namespace cge_test

@@ -1,7 +1,8 @@
 // PoseRefiner (cge/ceres/pose_refinement.hpp): synthetic scenes with a known pose are the oracle:
 // noise-free observations from a perturbed start must give back the true pose, injected gross
 // errors must be flagged and nothing else, sigma_px must scale the outlier test, and bad input must
-// throw naming what is wrong.
+// throw naming what is wrong. The cases that recover a pose run on both backends (the own
+// Levenberg-Marquardt, the default, and Ceres).
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -46,14 +47,23 @@ Scene make_scene(std::mt19937& rng, int n) {
   return s;
 }
 
+/// Default settings on the given backend.
+PoseRefinementSettings on(cge::PoseRefinementBackend backend) {
+  PoseRefinementSettings settings;
+  settings.backend = backend;
+  return settings;
+}
+
 }  // namespace
 
 TEST_CASE("PoseRefiner recovers the true pose from noise-free observations and a perturbed start", "[ceres]") {
+  const auto backend = GENERATE(cge::PoseRefinementBackend::pose_lm, cge::PoseRefinementBackend::ceres);
+  CAPTURE(cge::pose_refinement_backend_name(backend));
   std::mt19937 rng(11);
   for (int trial = 0; trial < 10; ++trial) {
     const Scene s = make_scene(rng, 60);
     const Eigen::Isometry3d start = s.T_world_camera * random_motion(rng, 0.1, 0.15);
-    const PoseRefinementResult r = PoseRefiner().refine(s.K, s.observations, start);
+    const PoseRefinementResult r = PoseRefiner(on(backend)).refine(s.K, s.observations, start);
     CAPTURE(trial);
     CHECK(rotation_error_rad(r.T_world_camera, s.T_world_camera) < 1e-6);
     CHECK(translation_error_m(r.T_world_camera, s.T_world_camera) < 1e-6);
@@ -67,6 +77,8 @@ TEST_CASE("PoseRefiner recovers the true pose from noise-free observations and a
 }
 
 TEST_CASE("PoseRefiner flags exactly the injected gross errors on otherwise exact data", "[ceres]") {
+  const auto backend = GENERATE(cge::PoseRefinementBackend::pose_lm, cge::PoseRefinementBackend::ceres);
+  CAPTURE(cge::pose_refinement_backend_name(backend));
   std::mt19937 rng(12);
   for (int trial = 0; trial < 5; ++trial) {
     Scene s = make_scene(rng, 200);
@@ -78,7 +90,7 @@ TEST_CASE("PoseRefiner flags exactly the injected gross errors on otherwise exac
       corrupted[i] = true;
     }
     const Eigen::Isometry3d start = s.T_world_camera * random_motion(rng, 0.05, 0.05);
-    const PoseRefinementResult r = PoseRefiner().refine(s.K, s.observations, start);
+    const PoseRefinementResult r = PoseRefiner(on(backend)).refine(s.K, s.observations, start);
     CAPTURE(trial);
     CHECK(rotation_error_rad(r.T_world_camera, s.T_world_camera) < 1e-6);
     CHECK(translation_error_m(r.T_world_camera, s.T_world_camera) < 1e-6);
@@ -89,12 +101,14 @@ TEST_CASE("PoseRefiner flags exactly the injected gross errors on otherwise exac
 }
 
 TEST_CASE("PoseRefiner with pixel noise: error at the noise level and about 5 % chi2 rejections", "[ceres]") {
+  const auto backend = GENERATE(cge::PoseRefinementBackend::pose_lm, cge::PoseRefinementBackend::ceres);
+  CAPTURE(cge::pose_refinement_backend_name(backend));
   std::mt19937 rng(13);
   Scene s = make_scene(rng, 1000);
   std::normal_distribution<double> noise(0.0, 1.0);
   for (PoseObservation& o : s.observations) o.pixel_px += o.sigma_px * Eigen::Vector2d(noise(rng), noise(rng));
   const PoseRefinementResult r =
-      PoseRefiner().refine(s.K, s.observations, s.T_world_camera * random_motion(rng, 0.05, 0.1));
+      PoseRefiner(on(backend)).refine(s.K, s.observations, s.T_world_camera * random_motion(rng, 0.05, 0.1));
   // 1000 points at 1..6 m with ~2 px noise: the pose is determined to well under a centimetre.
   CHECK(translation_error_m(r.T_world_camera, s.T_world_camera) < 0.01);
   CHECK(rotation_error_rad(r.T_world_camera, s.T_world_camera) < 0.002);
@@ -119,13 +133,15 @@ TEST_CASE("PoseRefiner scales the outlier test by each observation's sigma_px", 
 }
 
 TEST_CASE("PoseRefiner is deterministic: two runs give bit-identical results", "[ceres]") {
+  const auto backend = GENERATE(cge::PoseRefinementBackend::pose_lm, cge::PoseRefinementBackend::ceres);
+  CAPTURE(cge::pose_refinement_backend_name(backend));
   std::mt19937 rng(15);
   Scene s = make_scene(rng, 300);
   std::normal_distribution<double> noise(0.0, 1.0);
   for (PoseObservation& o : s.observations) o.pixel_px += o.sigma_px * Eigen::Vector2d(noise(rng), noise(rng));
   const Eigen::Isometry3d start = s.T_world_camera * random_motion(rng, 0.05, 0.1);
-  const PoseRefinementResult a = PoseRefiner().refine(s.K, s.observations, start);
-  const PoseRefinementResult b = PoseRefiner().refine(s.K, s.observations, start);
+  const PoseRefinementResult a = PoseRefiner(on(backend)).refine(s.K, s.observations, start);
+  const PoseRefinementResult b = PoseRefiner(on(backend)).refine(s.K, s.observations, start);
   CHECK(cge_test::bit_identical(a.T_world_camera, b.T_world_camera));
   CHECK(a.inliers == b.inliers);
   CHECK(a.final_cost == b.final_cost);

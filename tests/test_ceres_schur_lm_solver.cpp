@@ -19,6 +19,7 @@ using cge::SchurLMObservation;
 using cge::SchurLMSolver;
 using cge::SchurLMSummary;
 using cge::SE3Block;
+using cge_test::tight;
 using cge_test::uniform;
 
 struct Scene {
@@ -125,15 +126,6 @@ double gradient_max_norm(const Scene& s, const std::vector<bool>& fixed, double 
     }
   }
   return worst;
-}
-
-cge::CeresSolverSettings tight(int iterations) {
-  cge::CeresSolverSettings solver;
-  solver.max_iterations = iterations;
-  solver.function_tolerance = 1e-14;
-  solver.gradient_tolerance = 1e-12;
-  solver.parameter_tolerance = 1e-14;
-  return solver;
 }
 
 }  // namespace

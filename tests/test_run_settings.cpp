@@ -58,10 +58,13 @@ TEST_CASE("run settings: the System's settings from the options", "[run][setting
   opt.semantic_change_frames = 3;
   opt.local_ba_iterations_per_frame = 4;
   opt.local_ba_solver = "ceres";
+  opt.tracking_solver = "ceres";
   opt.semantic_instances = "dynamic";
   const cge::slam::SystemSettings s = cge::run::system_settings_from(opt);
   CHECK(s.local_mapping.bundle.backend == cge::BundleAdjustmentBackend::ceres);
   CHECK(defaults.local_mapping.bundle.backend == cge::BundleAdjustmentBackend::schur_lm);
+  CHECK(s.tracker.refinement.backend == cge::PoseRefinementBackend::ceres);
+  CHECK(defaults.tracker.refinement.backend == cge::PoseRefinementBackend::pose_lm);
   CHECK(s.patch_keyframes.dynamic_instances_only);
   CHECK_FALSE(defaults.patch_keyframes.dynamic_instances_only);
   CHECK(s.local_mapping.ba_iterations_per_frame == 4);

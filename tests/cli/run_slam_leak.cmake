@@ -103,6 +103,8 @@ expect_json("${summary}" 2 mapping_settings orb_spread)
 expect_json("${summary}" all mapping_settings map_maintenance)
 expect_json("${summary}" 10 mapping_settings keyframe_interval)
 expect_json("${summary}" pgo\\+ba mapping_settings loop_correction)
+expect_json("${summary}" pose_lm mapping_settings tracking_solver)
+expect_json("${summary}" schur_lm mapping_settings local_ba_solver)
 file(READ "${WORK}/rendered/trajectory.txt" default_trajectory)
 
 # 1b. The tracking and local-BA flags reach the run: each is recorded and changes the trajectory
@@ -113,6 +115,9 @@ file(READ "${WORK}/pixels_only/trajectory.txt" trajectory)
 if(trajectory STREQUAL default_trajectory)
   message(FATAL_ERROR "--tracking-depth-sigma 0 left the trajectory unchanged")
 endif()
+# The Ceres backend of the refinement reaches the run (the same optimum: the trajectory need not change).
+run_tool(0 "${EXE}" ${common} --mode none --tracking-solver ceres --out "${WORK}/ceres_tracking")
+expect_json("${WORK}/ceres_tracking/summary.json" ceres mapping_settings tracking_solver)
 run_tool(0 "${EXE}" ${common} --mode none --local-ba off --local-ba-window 3 --local-ba-fixed 0
          --out "${WORK}/no_local_ba")
 set(summary "${WORK}/no_local_ba/summary.json")

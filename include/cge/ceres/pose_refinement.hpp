@@ -15,6 +15,9 @@
 //     centre with the matching sideways translation, that far points barely constrain; the depth
 //     of points off the optical axis changes along it (ORB-SLAM2's RGB-D pose optimisation has a
 //     depth term too).
+// Two backends solve each round (PoseRefinementSettings::backend): cge's own 6x6
+// Levenberg-Marquardt (pose_lm_solver.hpp, the default) or Ceres; the same problem, rounds,
+// iterations and tolerances, the same minimum, different iterates (pose_lm_solver.hpp says how).
 // Internally the pose is T_camera_world (see reprojection_cost.hpp); input and output are
 // T_world_camera, metres. Deterministic: one thread, fixed options (solver_settings.hpp).
 #include "cge/ceres/ceres_headers.hpp"
@@ -28,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "cge/ceres/pose_lm_solver.hpp"
 #include "cge/ceres/reprojection_cost.hpp"
 #include "cge/ceres/robust_rounds.hpp"
 #include "cge/ceres/se3_parametrisation.hpp"
@@ -68,6 +72,14 @@ struct PoseOnlyReprojectionDepthCost {
   }
 };
 
+/// Which solver a pose refinement's rounds run (PoseRefinementSettings::backend).
+enum class PoseRefinementBackend { ceres, pose_lm };
+
+/// "ceres" or "pose_lm": the backend's name on the command line and in summary.json.
+inline const char* pose_refinement_backend_name(PoseRefinementBackend backend) {
+  return backend == PoseRefinementBackend::pose_lm ? "pose_lm" : "ceres";
+}
+
 /// The rounds, loss and outlier test (RobustRoundsSettings: ORB-SLAM2's PoseOptimization runs 4
 /// rounds, the first 2 with the Huber loss) and the inlier counts that stop the rounds early.
 struct PoseRefinementSettings : RobustRoundsSettings {
@@ -77,6 +89,9 @@ struct PoseRefinementSettings : RobustRoundsSettings {
   int min_inliers_to_continue = 10;
   /// Ceres iterations and tolerances per round (ORB-SLAM2: 10 iterations).
   CeresSolverSettings solver{10, 1e-8, 1e-10, 1e-10};
+  /// Who solves each round: cge's own Levenberg-Marquardt (pose_lm_solver.hpp; 3-5x cheaper per
+  /// tracked frame on the real slice, docs/REAL_DATA.md item 14) or Ceres.
+  PoseRefinementBackend backend = PoseRefinementBackend::pose_lm;
 
   PoseRefinementSettings() {
     rounds = 4;         // ORB-SLAM2: 4
@@ -129,7 +144,6 @@ class PoseRefiner {
     // Points not in front of the starting pose cannot enter the first round.
     classify(intrinsics, observations, pose.to_isometry(), /*use_chi2=*/false, result);
 
-    const ceres::Solver::Options options = settings.solver.options(/*sparse=*/false, /*schur=*/false);
     for (int round = 0; round < settings.rounds; ++round) {
       if (result.inlier_count < (round == 0 ? settings.min_observations : settings.min_inliers_to_continue)) {
         if (round == 0)
@@ -138,30 +152,13 @@ class PoseRefiner {
                                       std::to_string(settings.min_observations) + " needed");
         break;
       }
-      // One loss shared by every residual; it outlives the problem, which does not own it.
-      ceres::HuberLoss huber(settings.huber_delta > 0 ? settings.huber_delta : 1.0);  // any width when unused
-      ceres::Problem problem(problem_options());
-      pose.add_to(problem);
-      const bool robust = settings.robust_in_round(round);
-      for (std::size_t i = 0; i < n; ++i) {
-        if (!result.inliers[i]) continue;
-        const PoseObservation& o = observations[i];
-        PoseOnlyReprojectionCost cost{intrinsics, o.point_world_m, o.pixel_px, 1.0 / o.sigma_px, settings.min_depth_m};
-        ceres::CostFunction* function =
-            std::isnan(o.depth_m) ? PoseOnlyReprojectionCost::create(cost)
-                                  : PoseOnlyReprojectionDepthCost::create({cost, o.depth_m, 1.0 / o.sigma_depth_m});
-        problem.AddResidualBlock(function, robust ? &huber : nullptr, pose.q_xyzw.data(), pose.t.data());
-      }
-      ceres::Solver::Summary summary;
-      ceres::Solve(options, &problem, &summary);
-      if (round == 0) result.initial_cost = summary.initial_cost;
-      result.final_cost = summary.final_cost;
-      result.iterations += static_cast<int>(summary.iterations.size()) - 1;
-      // A round that starts at a minimum to machine precision can run out of iterations rejecting
-      // steps at the rounding floor: no decrease at all counts as converged too.
-      result.converged =
-          summary.termination_type == ceres::CONVERGENCE ||
-          (summary.termination_type == ceres::NO_CONVERGENCE && summary.final_cost >= summary.initial_cost);
+      const RoundOutcome outcome = settings.backend == PoseRefinementBackend::pose_lm
+                                       ? solve_round_pose_lm(intrinsics, observations, round, result.inliers, pose)
+                                       : solve_round_ceres(intrinsics, observations, round, result.inliers, pose);
+      if (round == 0) result.initial_cost = outcome.initial_cost;
+      result.final_cost = outcome.final_cost;
+      result.iterations += outcome.iterations;
+      result.converged = outcome.converged;
       result.rounds = round + 1;
       classify(intrinsics, observations, pose.to_isometry(), /*use_chi2=*/true, result);
     }
@@ -178,6 +175,74 @@ class PoseRefiner {
   }
 
  private:
+  struct RoundOutcome {
+    double initial_cost = 0;
+    double final_cost = 0;
+    int iterations = 0;
+    bool converged = false;
+  };
+
+  RoundOutcome solve_round_ceres(const PinholeIntrinsics<double>& intrinsics,
+                                 const std::vector<PoseObservation>& observations, int round,
+                                 const std::vector<bool>& inliers, SE3Block& pose) const {
+    // One loss shared by every residual; it outlives the problem, which does not own it.
+    ceres::HuberLoss huber(settings.huber_delta > 0 ? settings.huber_delta : 1.0);  // any width when unused
+    ceres::Problem problem(problem_options());
+    pose.add_to(problem);
+    const bool robust = settings.robust_in_round(round);
+    for (std::size_t i = 0; i < observations.size(); ++i) {
+      if (!inliers[i]) continue;
+      const PoseObservation& o = observations[i];
+      PoseOnlyReprojectionCost cost{intrinsics, o.point_world_m, o.pixel_px, 1.0 / o.sigma_px, settings.min_depth_m};
+      ceres::CostFunction* function =
+          std::isnan(o.depth_m) ? PoseOnlyReprojectionCost::create(cost)
+                                : PoseOnlyReprojectionDepthCost::create({cost, o.depth_m, 1.0 / o.sigma_depth_m});
+      problem.AddResidualBlock(function, robust ? &huber : nullptr, pose.q_xyzw.data(), pose.t.data());
+    }
+    ceres::Solver::Summary summary;
+    ceres::Solve(settings.solver.options(/*sparse=*/false, /*schur=*/false), &problem, &summary);
+    RoundOutcome out;
+    out.initial_cost = summary.initial_cost;
+    out.final_cost = summary.final_cost;
+    out.iterations = static_cast<int>(summary.iterations.size()) - 1;
+    // A round that starts at a minimum to machine precision can run out of iterations rejecting
+    // steps at the rounding floor: no decrease at all counts as converged too.
+    out.converged = summary.termination_type == ceres::CONVERGENCE ||
+                    (summary.termination_type == ceres::NO_CONVERGENCE && summary.final_cost >= summary.initial_cost);
+    return out;
+  }
+
+  RoundOutcome solve_round_pose_lm(const PinholeIntrinsics<double>& intrinsics,
+                                   const std::vector<PoseObservation>& observations, int round,
+                                   const std::vector<bool>& inliers, SE3Block& pose) const {
+    std::vector<PoseLMObservation> residuals;
+    residuals.reserve(observations.size());
+    for (std::size_t i = 0; i < observations.size(); ++i) {
+      if (!inliers[i]) continue;
+      const PoseObservation& o = observations[i];
+      PoseLMObservation r;
+      r.point_world_m = o.point_world_m;
+      r.pixel_px = o.pixel_px;
+      r.inv_sigma_px = 1.0 / o.sigma_px;
+      if (!std::isnan(o.depth_m)) {
+        r.depth_m = o.depth_m;
+        r.inv_sigma_depth = 1.0 / o.sigma_depth_m;
+      }
+      residuals.push_back(r);
+    }
+    const double huber = settings.robust_in_round(round) ? settings.huber_delta : 0.0;
+    const PoseLMSolver solver(intrinsics, settings.solver, huber, settings.min_depth_m);
+    const SchurLMSummary summary = solver.solve(pose, residuals, settings.solver.max_iterations);
+    RoundOutcome out;
+    out.initial_cost = summary.initial_cost;
+    out.final_cost = summary.final_cost;
+    out.iterations = summary.iterations;
+    out.converged = summary.termination == SchurLMSummary::Termination::converged ||
+                    (summary.termination == SchurLMSummary::Termination::iteration_limit &&
+                     summary.final_cost >= summary.initial_cost);
+    return out;
+  }
+
   void validate_input(const PinholeIntrinsics<double>& K, const std::vector<PoseObservation>& observations,
                       const Eigen::Isometry3d& T_world_camera_initial) const {
     if (!(std::isfinite(K.fx_px) && std::isfinite(K.fy_px) && std::isfinite(K.cx_px) && std::isfinite(K.cy_px) &&

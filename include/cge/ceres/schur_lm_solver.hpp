@@ -88,14 +88,8 @@ class SchurLMSolver {
     return rgbd_whitened_residual(K_, o.pixel_px, o.inv_sigma_px, o.depth_m, o.inv_sigma_depth, p, J_p);
   }
   /// rho(s) and rho'(s) of the squared residual norm s (Huber, or the identity without one).
-  double rho(double s) const {
-    if (huber_delta_ <= 0 || s <= huber_delta_ * huber_delta_) return s;
-    return 2.0 * huber_delta_ * std::sqrt(s) - huber_delta_ * huber_delta_;
-  }
-  double rho_prime(double s) const {
-    if (huber_delta_ <= 0 || s <= huber_delta_ * huber_delta_) return 1.0;
-    return huber_delta_ / std::sqrt(s);
-  }
+  double rho(double s) const;
+  double rho_prime(double s) const;
 
   PinholeIntrinsics<double> K_;
   CeresSolverSettings solver_;
@@ -133,7 +127,47 @@ inline void rotate_left(const std::array<double, 4>& q_xyzw, const Eigen::Vector
 /// Diagonal of the LM regulariser: diag(H) clamped as Ceres clamps it.
 inline double clamp_diagonal(double d) { return std::min(std::max(d, 1e-6), 1e32); }
 
+/// rho(s) of the squared residual norm s: Huber of width delta, or s itself when delta <= 0.
+inline double huber_rho(double s, double delta) {
+  if (delta <= 0 || s <= delta * delta) return s;
+  return 2.0 * delta * std::sqrt(s) - delta * delta;
+}
+/// rho'(s): the weight of an observation's rows in the normal equations (g2o's robust weighting).
+inline double huber_weight(double s, double delta) {
+  if (delta <= 0 || s <= delta * delta) return 1.0;
+  return delta / std::sqrt(s);
+}
+
+/// Ceres' LEVENBERG_MARQUARDT trust region: the damping 1 / radius, its schedule and the step test
+/// (SchurLMSolver and PoseLMSolver share it).
+struct TrustRegion {
+  double radius = 1e4;
+  double decrease_factor = 2.0;
+
+  double damping() const { return 1.0 / radius; }
+  /// The step test: accepted when the cost fell by more than 1e-3 of the model's decrease.
+  static bool successful(bool valid, double model_decrease, double cost_change) {
+    return valid && model_decrease > 0 && cost_change / model_decrease > 1e-3;
+  }
+  /// After an accepted step with gain ratio `ratio` (actual / predicted decrease).
+  void grow(double ratio) {
+    const double t = 2.0 * ratio - 1.0;
+    radius = std::min(1e16, radius / std::max(1.0 / 3.0, 1.0 - t * t * t));
+    decrease_factor = 2.0;
+  }
+  /// After a rejected step (or a failed factorisation). False when the radius fell under Ceres'
+  /// min_trust_region_radius: no step can lower the cost.
+  bool shrink() {
+    radius /= decrease_factor;
+    decrease_factor *= 2.0;
+    return radius >= 1e-32;
+  }
+};
+
 }  // namespace schur_lm_detail
+
+inline double SchurLMSolver::rho(double s) const { return schur_lm_detail::huber_rho(s, huber_delta_); }
+inline double SchurLMSolver::rho_prime(double s) const { return schur_lm_detail::huber_weight(s, huber_delta_); }
 
 /// The normal equations at one state: per free pose U (6x6), per point V (3x3), per observation
 /// with a free pose W = J_pose^T w J_point (6x3), and the gradient.
@@ -267,7 +301,7 @@ inline SchurLMSummary SchurLMSolver::solve(std::vector<SE3Block>& poses, const s
     return summary;
   }
 
-  double radius = 1e4, decrease_factor = 2.0;
+  schur_lm_detail::TrustRegion region;
   const int dim = 6 * nc;
   Eigen::MatrixXd S(dim, dim);
   Eigen::VectorXd rhs(dim), d_pose(dim);
@@ -281,7 +315,7 @@ inline SchurLMSummary SchurLMSolver::solve(std::vector<SE3Block>& poses, const s
 
   while (summary.iterations < max_iterations) {
     ++summary.iterations;
-    const double lambda = 1.0 / radius;
+    const double lambda = region.damping();
     // Reduced camera system S d_pose = rhs; (U + D) d_pose + W d_point = -g_pose,
     // W^T d_pose + (V + D) d_point = -g_point.
     S.setZero();
@@ -342,8 +376,7 @@ inline SchurLMSummary SchurLMSolver::solve(std::vector<SE3Block>& poses, const s
       }
     }
     if (!factorised) {
-      radius /= decrease_factor;
-      decrease_factor *= 2.0;
+      region.shrink();
       continue;
     }
     // Back-substitution for the points, and the step's norm and predicted decrease.
@@ -393,7 +426,7 @@ inline SchurLMSummary SchurLMSolver::solve(std::vector<SE3Block>& poses, const s
     const bool valid = cost(candidate_R, candidate_poses, candidate_points, observations, &candidate_cost);
     const double cost_change = valid ? current_cost - candidate_cost : -std::numeric_limits<double>::infinity();
     const bool tolerance_reached = valid && std::abs(cost_change) <= solver_.function_tolerance * current_cost;
-    const bool successful = valid && model_decrease > 0 && cost_change / model_decrease > 1e-3;
+    const bool successful = schur_lm_detail::TrustRegion::successful(valid, model_decrease, cost_change);
     if (successful || (tolerance_reached && cost_change > 0)) {
       const double ratio = model_decrease > 0 ? cost_change / model_decrease : 0.0;
       poses = candidate_poses;
@@ -405,9 +438,7 @@ inline SchurLMSummary SchurLMSolver::solve(std::vector<SE3Block>& poses, const s
         summary.termination = SchurLMSummary::Termination::converged;
         break;
       }
-      const double t = 2.0 * ratio - 1.0;
-      radius = std::min(1e16, radius / std::max(1.0 / 3.0, 1.0 - t * t * t));
-      decrease_factor = 2.0;
+      region.grow(ratio);
       linearise();
       if (gradient_max_norm() <= solver_.gradient_tolerance) {
         summary.termination = SchurLMSummary::Termination::converged;
@@ -418,9 +449,7 @@ inline SchurLMSummary SchurLMSolver::solve(std::vector<SE3Block>& poses, const s
         summary.termination = SchurLMSummary::Termination::converged;
         break;
       }
-      radius /= decrease_factor;
-      decrease_factor *= 2.0;
-      if (radius < 1e-32) {  // Ceres' min_trust_region_radius: no step can lower the cost
+      if (!region.shrink()) {
         summary.termination = SchurLMSummary::Termination::converged;
         break;
       }

@@ -56,6 +56,8 @@ struct SlamRunOptions {
   int local_ba_iterations_per_frame = slam::LocalMappingSettings{}.ba_iterations_per_frame;  ///< 0: whole rounds
   /// Local BA solver: ceres | schur_lm (BundleAdjustmentSettings::backend).
   std::string local_ba_solver = bundle_adjustment_backend_name(slam::LocalMappingSettings{}.bundle.backend);
+  /// Tracking refinement solver: ceres | pose_lm (PoseRefinementSettings::backend).
+  std::string tracking_solver = pose_refinement_backend_name(slam::TrackerSettings{}.refinement.backend);
   std::string map_maintenance = "all";  ///< all, none or a comma list of rules
   int keyframe_min_gap = slam::SystemSettings{}.orbslam2_keyframes.min_frame_gap;
   std::string loop_correction = "pgo+ba";  ///< none | pgo | pgo+ba
