@@ -56,6 +56,18 @@ inline bool bit_identical(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B
   return true;
 }
 
+/// T moved by +-h along tangent direction a of the optimisers' increment: a < 3 rotates about
+/// axis a, left-multiplied (Exp(h e_a) R); a >= 3 adds h to translation coordinate a - 3.
+inline Eigen::Isometry3d tangent_step(const Eigen::Isometry3d& T, int a, double h) {
+  Eigen::Isometry3d moved = T;
+  if (a < 3) {
+    moved.linear() = Eigen::AngleAxisd(h, Eigen::Vector3d::Unit(a)).toRotationMatrix() * T.linear();
+  } else {
+    moved.translation()(a - 3) += h;
+  }
+  return moved;
+}
+
 /// Solver settings tight enough that a solve ends at the optimum to rounding, not at a tolerance.
 inline cge::CeresSolverSettings tight(int iterations) {
   cge::CeresSolverSettings solver;

@@ -68,16 +68,9 @@ double gradient_max_norm(const Scene& s, const Eigen::Isometry3d& T, double delt
   const double h = 1e-6;
   double worst = 0;
   for (int a = 0; a < 6; ++a) {
-    Eigen::Isometry3d plus = T, minus = T;
-    if (a < 3) {
-      const Eigen::Vector3d axis = Eigen::Vector3d::Unit(a);
-      plus.linear() = Eigen::AngleAxisd(h, axis).toRotationMatrix() * T.linear();
-      minus.linear() = Eigen::AngleAxisd(-h, axis).toRotationMatrix() * T.linear();
-    } else {
-      plus.translation()(a - 3) += h;
-      minus.translation()(a - 3) -= h;
-    }
-    worst = std::max(worst, std::abs(oracle_cost(s, plus, delta) - oracle_cost(s, minus, delta)) / (2 * h));
+    const double plus = oracle_cost(s, cge_test::tangent_step(T, a, h), delta);
+    const double minus = oracle_cost(s, cge_test::tangent_step(T, a, -h), delta);
+    worst = std::max(worst, std::abs(plus - minus) / (2 * h));
   }
   return worst;
 }

@@ -102,18 +102,9 @@ double gradient_max_norm(const Scene& s, const std::vector<bool>& fixed, double 
   for (std::size_t i = 0; i < T.size(); ++i) {
     if (fixed[i]) continue;
     for (int a = 0; a < 6; ++a) {
-      Eigen::Isometry3d plus = T[i], minus = T[i];
-      if (a < 3) {
-        const Eigen::Vector3d axis = Eigen::Vector3d::Unit(a);
-        plus.linear() = Eigen::AngleAxisd(h, axis).toRotationMatrix() * T[i].linear();
-        minus.linear() = Eigen::AngleAxisd(-h, axis).toRotationMatrix() * T[i].linear();
-      } else {
-        plus.translation()(a - 3) += h;
-        minus.translation()(a - 3) -= h;
-      }
       std::vector<Eigen::Isometry3d> Tp = T, Tm = T;
-      Tp[i] = plus;
-      Tm[i] = minus;
+      Tp[i] = cge_test::tangent_step(T[i], a, h);
+      Tm[i] = cge_test::tangent_step(T[i], a, -h);
       worst = std::max(worst, std::abs(oracle_cost(s, Tp, X, delta) - oracle_cost(s, Tm, X, delta)) / (2 * h));
     }
   }

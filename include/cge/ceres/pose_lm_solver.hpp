@@ -151,31 +151,22 @@ inline SchurLMSummary PoseLMSolver::solve(SE3Block& pose, const std::vector<Pose
     double candidate_cost = std::numeric_limits<double>::infinity();
     const bool valid = cost(candidate_R, candidate_t, observations, &candidate_cost);
     const double cost_change = valid ? current_cost - candidate_cost : -std::numeric_limits<double>::infinity();
-    const bool tolerance_reached = valid && std::abs(cost_change) <= solver_.function_tolerance * current_cost;
-    const bool successful = schur_lm_detail::TrustRegion::successful(valid, model_decrease, cost_change);
-    if (successful || (tolerance_reached && cost_change > 0)) {
-      const double ratio = model_decrease > 0 ? cost_change / model_decrease : 0.0;
+    const schur_lm_detail::StepVerdict verdict =
+        region.judge(valid, model_decrease, cost_change, current_cost, solver_.function_tolerance);
+    if (verdict.accept) {
       pose = candidate;
       R = candidate_R;
       t = candidate_t;
       current_cost = candidate_cost;
       summary.final_cost = current_cost;
-      if (tolerance_reached) {
-        summary.termination = SchurLMSummary::Termination::converged;
-        break;
-      }
-      region.grow(ratio);
+    }
+    if (verdict.converged) {
+      summary.termination = SchurLMSummary::Termination::converged;
+      break;
+    }
+    if (verdict.accept) {
       linearise();
       if (g.cwiseAbs().maxCoeff() <= solver_.gradient_tolerance) {
-        summary.termination = SchurLMSummary::Termination::converged;
-        break;
-      }
-    } else {
-      if (tolerance_reached) {
-        summary.termination = SchurLMSummary::Termination::converged;
-        break;
-      }
-      if (!region.shrink()) {
         summary.termination = SchurLMSummary::Termination::converged;
         break;
       }

@@ -159,7 +159,10 @@ class PoseRefiner {
       if (round == 0) result.initial_cost = outcome.initial_cost;
       result.final_cost = outcome.final_cost;
       result.iterations += outcome.iterations;
-      result.converged = outcome.converged;
+      // A round that starts at a minimum to machine precision can run out of iterations rejecting
+      // steps at the rounding floor: no decrease at all counts as converged too.
+      result.converged =
+          outcome.converged || (outcome.hit_iteration_limit && outcome.final_cost >= outcome.initial_cost);
       result.rounds = round + 1;
       classify(intrinsics, observations, pose.to_isometry(), /*use_chi2=*/true, result);
     }
@@ -180,7 +183,8 @@ class PoseRefiner {
     double initial_cost = 0;
     double final_cost = 0;
     int iterations = 0;
-    bool converged = false;
+    bool converged = false;            ///< a convergence tolerance was reached
+    bool hit_iteration_limit = false;  ///< stopped by the iteration limit
   };
 
   RoundOutcome solve_round_ceres(const PinholeIntrinsics<double>& intrinsics,
@@ -206,10 +210,8 @@ class PoseRefiner {
     out.initial_cost = summary.initial_cost;
     out.final_cost = summary.final_cost;
     out.iterations = static_cast<int>(summary.iterations.size()) - 1;
-    // A round that starts at a minimum to machine precision can run out of iterations rejecting
-    // steps at the rounding floor: no decrease at all counts as converged too.
-    out.converged = summary.termination_type == ceres::CONVERGENCE ||
-                    (summary.termination_type == ceres::NO_CONVERGENCE && summary.final_cost >= summary.initial_cost);
+    out.converged = summary.termination_type == ceres::CONVERGENCE;
+    out.hit_iteration_limit = summary.termination_type == ceres::NO_CONVERGENCE;
     return out;
   }
 
@@ -238,9 +240,8 @@ class PoseRefiner {
     out.initial_cost = summary.initial_cost;
     out.final_cost = summary.final_cost;
     out.iterations = summary.iterations;
-    out.converged = summary.termination == SchurLMSummary::Termination::converged ||
-                    (summary.termination == SchurLMSummary::Termination::iteration_limit &&
-                     summary.final_cost >= summary.initial_cost);
+    out.converged = summary.termination == SchurLMSummary::Termination::converged;
+    out.hit_iteration_limit = summary.termination == SchurLMSummary::Termination::iteration_limit;
     return out;
   }
 

@@ -138,6 +138,12 @@ inline double huber_weight(double s, double delta) {
   return delta / std::sqrt(s);
 }
 
+/// What a solver does with a candidate step (TrustRegion::judge).
+struct StepVerdict {
+  bool accept = false;     ///< the candidate becomes the estimate
+  bool converged = false;  ///< stop: the cost-change tolerance is reached, or no step can lower the cost
+};
+
 /// Ceres' LEVENBERG_MARQUARDT trust region: the damping 1 / radius, its schedule and the step test
 /// (SchurLMSolver and PoseLMSolver share it).
 struct TrustRegion {
@@ -145,22 +151,43 @@ struct TrustRegion {
   double decrease_factor = 2.0;
 
   double damping() const { return 1.0 / radius; }
-  /// The step test: accepted when the cost fell by more than 1e-3 of the model's decrease.
-  static bool successful(bool valid, double model_decrease, double cost_change) {
-    return valid && model_decrease > 0 && cost_change / model_decrease > 1e-3;
+
+  /// Judges a candidate step and updates the radius. `valid`: the candidate's cost could be
+  /// evaluated (no point at or behind min_depth_m); `cost_change` = current cost - candidate's.
+  /// Accepted when the cost fell by more than 1e-3 of the model's decrease (the radius grows), or
+  /// fell at all within the cost-change tolerance |change| <= function_tolerance * cost, which also
+  /// converges, as a rejected step within it does; any other rejection shrinks the radius, and
+  /// converges when it falls under Ceres' min_trust_region_radius.
+  StepVerdict judge(bool valid, double model_decrease, double cost_change, double current_cost,
+                    double function_tolerance) {
+    StepVerdict v;
+    const bool tolerance_reached = valid && std::abs(cost_change) <= function_tolerance * current_cost;
+    const bool successful = valid && model_decrease > 0 && cost_change / model_decrease > 1e-3;
+    v.accept = successful || (tolerance_reached && cost_change > 0);
+    if (tolerance_reached) {
+      v.converged = true;
+    } else if (v.accept) {
+      grow(model_decrease > 0 ? cost_change / model_decrease : 0.0);
+    } else {
+      v.converged = !shrink();
+    }
+    return v;
   }
-  /// After an accepted step with gain ratio `ratio` (actual / predicted decrease).
-  void grow(double ratio) {
-    const double t = 2.0 * ratio - 1.0;
-    radius = std::min(1e16, radius / std::max(1.0 / 3.0, 1.0 - t * t * t));
-    decrease_factor = 2.0;
-  }
+
   /// After a rejected step (or a failed factorisation). False when the radius fell under Ceres'
   /// min_trust_region_radius: no step can lower the cost.
   bool shrink() {
     radius /= decrease_factor;
     decrease_factor *= 2.0;
     return radius >= 1e-32;
+  }
+
+ private:
+  /// After an accepted step with gain ratio `ratio` (actual / predicted decrease).
+  void grow(double ratio) {
+    const double t = 2.0 * ratio - 1.0;
+    radius = std::min(1e16, radius / std::max(1.0 / 3.0, 1.0 - t * t * t));
+    decrease_factor = 2.0;
   }
 };
 
@@ -425,31 +452,22 @@ inline SchurLMSummary SchurLMSolver::solve(std::vector<SE3Block>& poses, const s
     double candidate_cost = std::numeric_limits<double>::infinity();
     const bool valid = cost(candidate_R, candidate_poses, candidate_points, observations, &candidate_cost);
     const double cost_change = valid ? current_cost - candidate_cost : -std::numeric_limits<double>::infinity();
-    const bool tolerance_reached = valid && std::abs(cost_change) <= solver_.function_tolerance * current_cost;
-    const bool successful = schur_lm_detail::TrustRegion::successful(valid, model_decrease, cost_change);
-    if (successful || (tolerance_reached && cost_change > 0)) {
-      const double ratio = model_decrease > 0 ? cost_change / model_decrease : 0.0;
+    const schur_lm_detail::StepVerdict verdict =
+        region.judge(valid, model_decrease, cost_change, current_cost, solver_.function_tolerance);
+    if (verdict.accept) {
       poses = candidate_poses;
       points = candidate_points;
       R = candidate_R;
       current_cost = candidate_cost;
       summary.final_cost = current_cost;
-      if (tolerance_reached) {
-        summary.termination = SchurLMSummary::Termination::converged;
-        break;
-      }
-      region.grow(ratio);
+    }
+    if (verdict.converged) {
+      summary.termination = SchurLMSummary::Termination::converged;
+      break;
+    }
+    if (verdict.accept) {
       linearise();
       if (gradient_max_norm() <= solver_.gradient_tolerance) {
-        summary.termination = SchurLMSummary::Termination::converged;
-        break;
-      }
-    } else {
-      if (tolerance_reached) {
-        summary.termination = SchurLMSummary::Termination::converged;
-        break;
-      }
-      if (!region.shrink()) {
         summary.termination = SchurLMSummary::Termination::converged;
         break;
       }
