@@ -188,14 +188,14 @@ TEST_CASE("keyframe_bundle_observation: pixel sigma by octave, depth sigma growi
   kf.points_camera_m.emplace_back(0.1, 0.2, 2.0);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   kf.points_camera_m.emplace_back(nan, nan, nan);
-  const cge::BundleObservation a = cge::slam::keyframe_bundle_observation(kf, 0, 3, 7, 1.2, 0.003);
+  const cge::BundleObservation a = cge::slam::keyframe_bundle_observation(kf, 0, 3, 7, cge::slam::OctaveScales(1.2), 0.003);
   CHECK(a.keyframe == 3);
   CHECK(a.point == 7);
   CHECK(a.pixel_px == Eigen::Vector2d(10, 20));
   CHECK(a.sigma_px == Approx(1.44));
   CHECK(a.depth_m == 2.0);
   CHECK(a.sigma_depth_m == Approx(0.012));  // 0.003 * 2^2
-  const cge::BundleObservation b = cge::slam::keyframe_bundle_observation(kf, 1, 0, 0, 1.2, 0.003);
+  const cge::BundleObservation b = cge::slam::keyframe_bundle_observation(kf, 1, 0, 0, cge::slam::OctaveScales(1.2), 0.003);
   CHECK(std::isnan(b.depth_m));
 }
 

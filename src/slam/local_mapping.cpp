@@ -13,14 +13,14 @@ namespace cge {
 namespace slam {
 
 BundleObservation keyframe_bundle_observation(const Keyframe& kf, int keypoint_index, int pose, int point,
-                                              double orb_scale_factor, double depth_sigma_per_m) {
+                                              const OctaveScales& octave_scales, double depth_sigma_per_m) {
   const cv::KeyPoint& kp = kf.keypoints[static_cast<std::size_t>(keypoint_index)];
   BundleObservation b;
   b.keyframe = pose;
   b.point = point;
   const cv::Point2f pixel = undistorted_position(kf, static_cast<std::size_t>(keypoint_index));
   b.pixel_px = Eigen::Vector2d(pixel.x, pixel.y);
-  b.sigma_px = keypoint_sigma_px(kp, orb_scale_factor);
+  b.sigma_px = octave_scales(kp.octave);
   const double z = kf.points_camera_m[static_cast<std::size_t>(keypoint_index)].z();
   if (std::isfinite(z) && z > 0) {
     b.depth_m = z;
@@ -98,6 +98,7 @@ LocalBundleAdjustment::LocalBundleAdjustment(const Map& map, int keyframe_id,
   std::vector<BundleObservation>& observations = observations_;
   std::vector<BundleObservation> of_point;   // the point's observations taking part, pose index unset
   std::vector<int> keyframe_of_observation;  // their keyframes
+  const OctaveScales octave_scales(orb_scale_factor);
   for (const std::int64_t id : point_ids) {
     const MapPoint& p = map.map_point(id);
     of_point.clear();
@@ -105,7 +106,7 @@ LocalBundleAdjustment::LocalBundleAdjustment(const Map& map, int keyframe_id,
     for (const Observation& o : p.observations) {
       if (!takes_part(o.keyframe_id)) continue;
       of_point.push_back(keyframe_bundle_observation(map.keyframe(o.keyframe_id), o.keypoint_index, -1,
-                                                     static_cast<int>(points.size()), orb_scale_factor,
+                                                     static_cast<int>(points.size()), octave_scales,
                                                      lm.depth_sigma_per_m));
       keyframe_of_observation.push_back(o.keyframe_id);
     }

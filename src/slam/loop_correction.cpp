@@ -123,6 +123,7 @@ void LoopCorrection::global_bundle_adjustment(Map& map, const Nodes& node,
   std::vector<Eigen::Vector3d> points;
   std::vector<std::int64_t> point_ids;
   std::vector<BundleObservation> observations;
+  const OctaveScales octave_scales(orb_scale_factor_);
   for (const MapPoint& p : map.map_points()) {
     if (p.observations.size() < 2) continue;
     const int index = static_cast<int>(points.size());
@@ -130,7 +131,7 @@ void LoopCorrection::global_bundle_adjustment(Map& map, const Nodes& node,
     point_ids.push_back(p.id);
     for (const Observation& o : p.observations) {
       observations.push_back(keyframe_bundle_observation(map.keyframe(o.keyframe_id), o.keypoint_index,
-                                                         node(o.keyframe_id), index, orb_scale_factor_,
+                                                         node(o.keyframe_id), index, octave_scales,
                                                          settings_.depth_sigma_per_m));
     }
   }

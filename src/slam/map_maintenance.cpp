@@ -10,6 +10,7 @@
 
 #include "cge/bow/binary_descriptor.hpp"
 #include "cge/slam/geometry/nearest_two.hpp"
+#include "cge/slam/octave_scales.hpp"
 
 namespace cge {
 namespace slam {
@@ -51,8 +52,6 @@ bool has_depth(const Keyframe& kf, int i) {
 bool is_static(const Keyframe& kf, int i) {
   return kf.labels[static_cast<std::size_t>(i)] == FeatureLabel::static_feature;
 }
-
-double level_scale(double scale_factor, int octave) { return std::pow(scale_factor, std::max(octave, 0)); }
 
 void check_live(const Map& map, int keyframe_id, const char* where) {
   if (keyframe_id < 0 || keyframe_id >= map.keyframe_count()) {
@@ -112,21 +111,22 @@ bool observes(const MapPoint& p, int keyframe_id) {
 }
 
 /// ORBmatcher::Fuse for one point into one keyframe (see fuse_map_points).
-void fuse_point(Map& map, std::int64_t point_id, int target, const StaticKeypointGrid& grid,
-                const PinholeIntrinsics<double>& intrinsics, const cv::Size& image_size, double scale_factor,
-                const MapMaintenanceSettings& s, FusionReport& report) {
+void fuse_point(Map& map, std::int64_t point_id, int target, const Eigen::Isometry3d& T_camera_world,
+                const StaticKeypointGrid& grid, const PinholeIntrinsics<double>& intrinsics,
+                const cv::Size& image_size, const OctaveScales& scales, const MapMaintenanceSettings& s,
+                FusionReport& report) {
   const MapPoint& p = map.map_point(point_id);
   if (p.bad || observes(p, target)) return;
   const Keyframe& kf = map.keyframe(target);
-  const Eigen::Vector3d p_camera = kf.T_world_camera.inverse() * p.position_world;
+  const Eigen::Vector3d p_camera = T_camera_world * p.position_world;
   if (!(p_camera.z() > 0)) return;
   const Eigen::Vector2d uv = intrinsics.project(p_camera);
   if (!(uv.x() >= 0 && uv.x() < image_size.width && uv.y() >= 0 && uv.y() < image_size.height)) return;
   ++report.projections;
   const std::uint8_t* descriptor = p.descriptor.ptr<std::uint8_t>(0);
   int best_distance = INT_MAX, best = -1;
-  grid.for_each_near(uv.x(), uv.y(), s.fuse_radius_px * level_scale(scale_factor, grid.max_octave()), [&](int i) {
-    const double sigma = level_scale(scale_factor, kf.keypoints[static_cast<std::size_t>(i)].octave);
+  grid.for_each_near(uv.x(), uv.y(), s.fuse_radius_px * scales(grid.max_octave()), [&](int i) {
+    const double sigma = scales(kf.keypoints[static_cast<std::size_t>(i)].octave);
     const cv::Point2f& kp = kf.undistorted_px[static_cast<std::size_t>(i)];
     const double d2 = (kp.x - uv.x()) * (kp.x - uv.x()) + (kp.y - uv.y()) * (kp.y - uv.y());
     const double radius = s.fuse_radius_px * sigma;
@@ -220,10 +220,12 @@ FusionReport fuse_map_points(Map& map, int keyframe_id, const PinholeIntrinsics<
   for (const std::int64_t p : map.keyframe(keyframe_id).map_point_ids) {
     if (p >= 0) own.push_back(p);
   }
+  const OctaveScales scales(orb_scale_factor);
   for (const int target : report.targets) {
     const StaticKeypointGrid grid(map.keyframe(target), image_size);
+    const Eigen::Isometry3d T_camera_world = map.keyframe(target).T_world_camera.inverse();
     for (const std::int64_t p : own) {
-      fuse_point(map, p, target, grid, intrinsics, image_size, orb_scale_factor, s, report);
+      fuse_point(map, p, target, T_camera_world, grid, intrinsics, image_size, scales, s, report);
     }
   }
   // The targets' points into the keyframe.
@@ -236,8 +238,9 @@ FusionReport fuse_map_points(Map& map, int keyframe_id, const PinholeIntrinsics<
   std::sort(theirs.begin(), theirs.end());
   theirs.erase(std::unique(theirs.begin(), theirs.end()), theirs.end());
   const StaticKeypointGrid grid(map.keyframe(keyframe_id), image_size);
+  const Eigen::Isometry3d T_camera_world = map.keyframe(keyframe_id).T_world_camera.inverse();
   for (const std::int64_t p : theirs) {
-    fuse_point(map, p, keyframe_id, grid, intrinsics, image_size, orb_scale_factor, s, report);
+    fuse_point(map, p, keyframe_id, T_camera_world, grid, intrinsics, image_size, scales, s, report);
   }
   return report;
 }
@@ -335,6 +338,7 @@ TriangulationReport triangulate_new_points(Map& map, int keyframe_id, const Pinh
                                            double scale_factor, const MapMaintenanceSettings& s) {
   check_live(map, keyframe_id, "triangulate_new_points");
   check_scale_factor(scale_factor, "triangulate_new_points");
+  const OctaveScales level_scale(scale_factor);
   TriangulationReport report;
   report.neighbours = map.covisible_keyframes(keyframe_id, s.triangulation_neighbours);
   std::sort(report.neighbours.begin(), report.neighbours.end());
@@ -375,11 +379,11 @@ TriangulationReport triangulate_new_points(Map& map, int keyframe_id, const Pinh
       for (int j = 0; j < static_cast<int>(kf2.keypoints.size()); ++j) {
         if (used[static_cast<std::size_t>(j)] || !usable_for_triangulation(kf2, j)) continue;
         const cv::Point2f& p2 = kf2.undistorted_px[static_cast<std::size_t>(j)];
-        const double sigma2 = std::pow(level_scale(scale_factor, kf2.keypoints[static_cast<std::size_t>(j)].octave), 2);
+        const double sigma2 = std::pow(level_scale(kf2.keypoints[static_cast<std::size_t>(j)].octave), 2);
         if (has_epipole) {
           const double ex = p2.x - epipole.x(), ey = p2.y - epipole.y();
           const double limit = s.triangulation_epipole_px * s.triangulation_epipole_px *
-                               level_scale(scale_factor, kf2.keypoints[static_cast<std::size_t>(j)].octave);
+                               level_scale(kf2.keypoints[static_cast<std::size_t>(j)].octave);
           if (ex * ex + ey * ey < limit) continue;
         }
         const double num = line.x() * p2.x + line.y() * p2.y + line.z();
@@ -407,7 +411,7 @@ TriangulationReport triangulate_new_points(Map& map, int keyframe_id, const Pinh
         const Eigen::Vector3d p = c.R * X + c.t;
         if (!(p.z() > 0)) return false;
         const Eigen::Vector2d uv = K.project(p);
-        const double sigma = level_scale(scale_factor, kp.octave);
+        const double sigma = level_scale(kp.octave);
         const double e2 = (uv.x() - px.x) * (uv.x() - px.x) + (uv.y() - px.y) * (uv.y() - px.y);
         return e2 / (sigma * sigma) < s.triangulation_chi2;
       };
@@ -418,7 +422,7 @@ TriangulationReport triangulate_new_points(Map& map, int keyframe_id, const Pinh
       const double dist1 = (X - c1.centre).norm(), dist2 = (X - c2.centre).norm();
       if (!(dist1 > 0 && dist2 > 0)) continue;
       const double ratio_distance = dist2 / dist1;
-      const double ratio_octave = level_scale(scale_factor, kp1.octave) / level_scale(scale_factor, kp2.octave);
+      const double ratio_octave = level_scale(kp1.octave) / level_scale(kp2.octave);
       const double tolerance = s.triangulation_scale_tolerance * scale_factor;
       if (ratio_distance * tolerance < ratio_octave || ratio_distance > ratio_octave * tolerance) continue;
       const std::int64_t id = map.add_map_point(X, kf1.descriptors.row(i), keyframe_id);

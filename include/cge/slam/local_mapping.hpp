@@ -20,6 +20,7 @@
 #include "cge/core/pinhole_intrinsics.hpp"
 #include "cge/slam/keyframe.hpp"
 #include "cge/slam/map.hpp"
+#include "cge/slam/octave_scales.hpp"
 #include "cge/slam/settings.hpp"
 
 namespace cge {
@@ -44,10 +45,10 @@ struct LocalBundleAdjustmentReport {
 };
 
 /// The bundle-adjustment observation of keypoint `keypoint_index` of `kf`: its pixel with sigma
-/// orb_scale_factor^octave and, when the keypoint has depth z, that depth with sigma
+/// scale_factor^octave (`octave_scales`) and, when the keypoint has depth z, that depth with sigma
 /// depth_sigma_per_m * z^2; for the pose at index `pose` and the point at index `point` of a problem.
 BundleObservation keyframe_bundle_observation(const Keyframe& kf, int keypoint_index, int pose, int point,
-                                              double orb_scale_factor, double depth_sigma_per_m);
+                                              const OctaveScales& octave_scales, double depth_sigma_per_m);
 
 /// The local bundle adjustment of one keyframe's window, solved a round at a time so that the
 /// pipeline can spread its rounds over frames (LocalMappingSettings::ba_rounds_per_frame). Between
