@@ -67,6 +67,32 @@ Eigen::Vector3f rgb(double r, double g, double b) {
   return Eigen::Vector3f(static_cast<float>(r), static_cast<float>(g), static_cast<float>(b));
 }
 
+/// A colour with each channel uniform in [lo, hi], drawn blue, green, red. One statement per draw:
+/// the order of draws inside one call's arguments is unspecified in C++, so a compiler could render
+/// another scene from the same seed. This order (and the one of the draws around each call below)
+/// is the one GCC took when the draws were still arguments, so the presets keep their bytes.
+Eigen::Vector3f random_rgb(Rng& r, double lo, double hi) {
+  const double blue = r.uniform(lo, hi);
+  const double green = r.uniform(lo, hi);
+  const double red = r.uniform(lo, hi);
+  return rgb(red, green, blue);
+}
+
+/// A two-colour pattern of random colours: colour a in [a_lo, a_hi], colour b in [b_lo, b_hi] per
+/// channel, cell size uniform in [scale_lo, scale_hi]; drawn scale, b, a (see random_rgb).
+struct RandomColours {
+  Eigen::Vector3f a, b;
+  double scale;
+};
+RandomColours random_colours(Rng& r, double a_lo, double a_hi, double b_lo, double b_hi, double scale_lo,
+                             double scale_hi) {
+  RandomColours c;
+  c.scale = r.uniform(scale_lo, scale_hi);
+  c.b = random_rgb(r, b_lo, b_hi);
+  c.a = random_rgb(r, a_lo, a_hi);
+  return c;
+}
+
 /// Camera pose looking along `forward` (world), x to the right and y down with no roll.
 Eigen::Isometry3d look_along(const Eigen::Vector3d& eye, const Eigen::Vector3d& forward) {
   const Eigen::Vector3d z = forward.normalized();
@@ -217,11 +243,8 @@ void add_plant(SceneBuilder& b, const Eigen::Vector2d& at, double scale, int fir
 /// Posters: random-shape patterns on a vertical wall.
 void add_poster(SceneBuilder& b, const Eigen::Vector3d& centre, const Eigen::Vector3d& normal, double half_u,
                 double half_v) {
-  Rng& r = b.rng();
-  const Material m =
-      b.material(Pattern::blocks, rgb(r.uniform(0.6, 0.95), r.uniform(0.6, 0.95), r.uniform(0.6, 0.95)),
-                 rgb(r.uniform(0.1, 0.5), r.uniform(0.1, 0.5), r.uniform(0.1, 0.5)), r.uniform(0.08, 0.16));
-  b.wall_quad(centre, normal, half_u, half_v, m);
+  const RandomColours c = random_colours(b.rng(), 0.6, 0.95, 0.1, 0.5, 0.08, 0.16);
+  b.wall_quad(centre, normal, half_u, half_v, b.material(Pattern::blocks, c.a, c.b, c.scale));
 }
 
 void build_room(SceneBuilder& b) {
@@ -259,8 +282,11 @@ void build_room(SceneBuilder& b) {
   b.box({0, 2.85, 0.75}, {2.0, 0.03, 0.75}, 0,
         b.material(Pattern::noise, rgb(0.55, 0.6, 0.68), rgb(0.3, 0.34, 0.42), 0.1));
   for (int i = 0; i < 6; ++i) {
-    add_poster(b, {-1.7 + i * 0.68 + r.uniform(-0.1, 0.1), 2.815, 1.1 + r.uniform(-0.15, 0.15)},
-               -Eigen::Vector3d::UnitY(), r.uniform(0.12, 0.2), r.uniform(0.12, 0.2));
+    const double half_v = r.uniform(0.12, 0.2);
+    const double half_u = r.uniform(0.12, 0.2);
+    const double x = -1.7 + i * 0.68 + r.uniform(-0.1, 0.1);
+    const double z = 1.1 + r.uniform(-0.15, 0.15);
+    add_poster(b, {x, 2.815, z}, -Eigen::Vector3d::UnitY(), half_u, half_v);
   }
   add_poster(b, {-1.3, kHalfY - 0.005, 2.0}, -Eigen::Vector3d::UnitY(), 0.45, 0.3);
   add_poster(b, {0.2, kHalfY - 0.005, 1.95}, -Eigen::Vector3d::UnitY(), 0.25, 0.32);
@@ -638,10 +664,9 @@ void add_lap_screen(SceneBuilder& b, const PresetSettings& s, int lap, int first
     const double mid = from + (j + 0.5) * step;
     const Eigen::Vector3d inward(-std::cos(mid), -std::sin(mid), 0);
     const Eigen::Vector3d centre = -inward * radius * std::cos(0.5 * step);
-    const Material m =
-        b.material(Pattern::blocks, rgb(r.uniform(0.5, 0.95), r.uniform(0.5, 0.95), r.uniform(0.5, 0.95)),
-                   rgb(r.uniform(0.05, 0.45), r.uniform(0.05, 0.45), r.uniform(0.05, 0.45)),
-                   r.uniform(0.04, 0.06));  // small cells: texture to track at 0.6 m
+    // Small cells: texture to track at 0.6 m.
+    const RandomColours c = random_colours(r, 0.5, 0.95, 0.05, 0.45, 0.04, 0.06);
+    const Material m = b.material(Pattern::blocks, c.a, c.b, c.scale);
     // Half width a little over the chord's so neighbouring panels meet without a gap.
     Primitive p =
         make_quad(centre + Eigen::Vector3d(0, 0, kRoomHeight / 2), inward, Eigen::Vector3d::UnitZ().cross(inward),
@@ -661,9 +686,8 @@ void add_group_counter(SceneBuilder& b, const PresetSettings& s, int first_frame
   Rng& r = b.rng();
   Primitive body = make_box({front + 0.5 * kCounterDepthM, 0, 0.5 * top}, {0.5 * kCounterDepthM, half_y, 0.5 * top}, 0,
                             b.material(Pattern::noise, rgb(0.55, 0.45, 0.35), rgb(0.35, 0.28, 0.2), 0.03));
-  const Material poster =
-      b.material(Pattern::blocks, rgb(r.uniform(0.6, 0.95), r.uniform(0.6, 0.95), r.uniform(0.6, 0.95)),
-                 rgb(r.uniform(0.05, 0.45), r.uniform(0.05, 0.45), r.uniform(0.05, 0.45)), r.uniform(0.03, 0.045));
+  const RandomColours colours = random_colours(r, 0.6, 0.95, 0.05, 0.45, 0.03, 0.045);
+  const Material poster = b.material(Pattern::blocks, colours.a, colours.b, colours.scale);
   Primitive front_poster = make_quad({front - 0.0015, 0, 0.5 * top}, -Eigen::Vector3d::UnitX(),
                                      -Eigen::Vector3d::UnitY(), half_y - 0.01, 0.5 * top - 0.01, poster);
   for (Primitive* p : {&body, &front_poster}) {
