@@ -234,6 +234,11 @@ int main(int argc, char** argv) {
                  "rounds and tolerances")
       ->check(CLI::IsMember({"ceres", "pose_lm"}))
       ->capture_default_str();
+  app.add_option("--global-ba-solver", opt.global_ba_solver,
+                 "the global BA after a loop correction: schur_lm (cge's own, dense reduced system; more than "
+                 "100 free keyframes go to Ceres' sparse Schur) or ceres; same rounds, iterations and tolerances")
+      ->check(CLI::IsMember({"ceres", "schur_lm"}))
+      ->capture_default_str();
   app.add_option("--orb-spread", opt.orb_spread,
                  "ORB candidates per kept keypoint, spread over the image cell by cell (1: cv::ORB's own choice)")
       ->check(CLI::Range(1, 8));

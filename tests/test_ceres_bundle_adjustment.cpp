@@ -259,6 +259,39 @@ TEST_CASE("BundleAdjuster is deterministic: two runs give bit-identical results"
   CHECK(a.final_cost == b.final_cost);
 }
 
+TEST_CASE("BundleAdjuster schur_lm: more free poses than schur_lm_max_free_poses go to Ceres, bit for bit", "[ceres]") {
+  std::mt19937 rng(37);
+  BAScene s = make_ba_scene(rng, 6, 200, true);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  for (BundleObservation& o : s.observations) o.pixel_px += Eigen::Vector2d(noise(rng), noise(rng));
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector3d> points;
+  perturb(rng, s, poses, points, {0});  // 5 free poses
+  const auto same = [&](const BundleAdjustmentResult& a, const BundleAdjustmentResult& b) {
+    bool identical = a.final_cost == b.final_cost && a.iterations == b.iterations && a.outliers == b.outliers;
+    for (std::size_t i = 0; i < poses.size(); ++i)
+      identical = identical && cge_test::bit_identical(a.T_world_camera[i], b.T_world_camera[i]);
+    for (std::size_t j = 0; j < points.size(); ++j)
+      identical = identical &&
+                  std::memcmp(a.points_world_m[j].data(), b.points_world_m[j].data(), 3 * sizeof(double)) == 0;
+    return identical;
+  };
+  const BundleAdjustmentResult by_ceres =
+      BundleAdjuster(with_backend(cge::BundleAdjustmentBackend::ceres)).adjust(s.K, poses, points, s.observations);
+  const BundleAdjustmentResult by_schur_lm =
+      BundleAdjuster(with_backend(cge::BundleAdjustmentBackend::schur_lm)).adjust(s.K, poses, points, s.observations);
+  REQUIRE_FALSE(same(by_ceres, by_schur_lm));  // the two solvers' iterates differ, so the test can tell them apart
+
+  BundleAdjustmentSettings limited = with_backend(cge::BundleAdjustmentBackend::schur_lm);
+  limited.schur_lm_max_free_poses = 4;
+  CHECK(same(BundleAdjuster(limited).adjust(s.K, poses, points, s.observations), by_ceres));
+  limited.schur_lm_max_free_poses = 5;
+  CHECK(same(BundleAdjuster(limited).adjust(s.K, poses, points, s.observations), by_schur_lm));
+
+  limited.schur_lm_max_free_poses = 0;
+  CHECK_THROWS_WITH(limited.validate(), Catch::Contains("schur_lm_max_free_poses must be at least 1"));
+}
+
 TEST_CASE("BundleAdjuster rejects invalid input with a message naming it", "[ceres]") {
   std::mt19937 rng(37);
   const BAScene s = make_ba_scene(rng, 3, 30, false);

@@ -104,6 +104,8 @@ slam::SystemSettings system_settings_from(const SlamRunOptions& opt) {
       opt.local_ba_solver == "schur_lm" ? BundleAdjustmentBackend::schur_lm : BundleAdjustmentBackend::ceres;
   settings.tracker.refinement.backend =
       opt.tracking_solver == "ceres" ? PoseRefinementBackend::ceres : PoseRefinementBackend::pose_lm;
+  settings.loop_correction.bundle.backend =
+      opt.global_ba_solver == "schur_lm" ? BundleAdjustmentBackend::schur_lm : BundleAdjustmentBackend::ceres;
   apply_map_maintenance(opt.map_maintenance, settings.local_mapping);
   settings.orbslam2_keyframes.min_frame_gap = opt.keyframe_min_gap;
   settings.keep_keyframe_images = opt.map;

@@ -105,6 +105,7 @@ expect_json("${summary}" 10 mapping_settings keyframe_interval)
 expect_json("${summary}" pgo\\+ba mapping_settings loop_correction)
 expect_json("${summary}" pose_lm mapping_settings tracking_solver)
 expect_json("${summary}" schur_lm mapping_settings local_ba_solver)
+expect_json("${summary}" schur_lm mapping_settings global_ba_solver)
 file(READ "${WORK}/rendered/trajectory.txt" default_trajectory)
 
 # 1b. The tracking and local-BA flags reach the run: each is recorded and changes the trajectory
@@ -118,6 +119,8 @@ endif()
 # The Ceres backend of the refinement reaches the run (the same optimum: the trajectory need not change).
 run_tool(0 "${EXE}" ${common} --mode none --tracking-solver ceres --out "${WORK}/ceres_tracking")
 expect_json("${WORK}/ceres_tracking/summary.json" ceres mapping_settings tracking_solver)
+run_tool(0 "${EXE}" ${common} --mode none --global-ba-solver ceres --out "${WORK}/ceres_global_ba")
+expect_json("${WORK}/ceres_global_ba/summary.json" ceres mapping_settings global_ba_solver)
 run_tool(0 "${EXE}" ${common} --mode none --local-ba off --local-ba-window 3 --local-ba-fixed 0
          --out "${WORK}/no_local_ba")
 set(summary "${WORK}/no_local_ba/summary.json")

@@ -100,6 +100,11 @@ struct BundleAdjustmentSettings : RobustRoundsSettings {
   /// Levenberg-Marquardt (schur_lm_solver.hpp: the same problem, rounds, iteration budget and
   /// tolerances, dense reduced system; for local windows, where Ceres' per-block overhead dominates).
   BundleAdjustmentBackend backend = BundleAdjustmentBackend::ceres;
+  /// With backend schur_lm: the most free poses a round gives cge's solver, count >= 1. Its
+  /// reduced camera system is dense (6 unknowns a pose, factorised in O((6 n)^3)), so a round with
+  /// more free poses goes to Ceres with sparse_schur as set. Ours: 100 keyframes is twice the
+  /// largest global BA measured (53 keyframes, docs/OPTIMISATION.md), a 600 x 600 factorisation.
+  int schur_lm_max_free_poses = 100;
 
   BundleAdjustmentSettings() {
     rounds = 2;         // ORB-SLAM2's local BA: 2 (1 = a single plain solve)
@@ -110,6 +115,10 @@ struct BundleAdjustmentSettings : RobustRoundsSettings {
   void validate() const {
     validate_rounds("BundleAdjustmentSettings");
     solver.validate("BundleAdjustmentSettings.solver");
+    if (schur_lm_max_free_poses < 1) {
+      throw std::invalid_argument("BundleAdjustmentSettings: schur_lm_max_free_poses must be at least 1 (got " +
+                                  std::to_string(schur_lm_max_free_poses) + ")");
+    }
   }
 };
 
@@ -173,6 +182,8 @@ class BundleAdjustmentRun {
   /// One slice of the current round over the active observations, at most `slice_limit` iterations.
   SliceOutcome solve_slice_ceres(bool robust, int slice_limit);
   SliceOutcome solve_slice_schur_lm(bool robust, int slice_limit);
+  /// backend schur_lm, and the active observations' free poses within schur_lm_max_free_poses.
+  bool solved_by_schur_lm() const;
 
   BundleAdjustmentSettings settings_;
   PinholeIntrinsics<double> intrinsics_;
@@ -306,7 +317,7 @@ inline int BundleAdjustmentRun::solve_next_slice(int max_iterations) {
     finished_ = true;
     return 0;
   }
-  const SliceOutcome outcome = settings_.backend == BundleAdjustmentBackend::schur_lm
+  const SliceOutcome outcome = solved_by_schur_lm()
                                    ? solve_slice_schur_lm(settings_.robust_in_round(round), slice_limit)
                                    : solve_slice_ceres(settings_.robust_in_round(round), slice_limit);
   const int used = outcome.iterations;
@@ -335,6 +346,19 @@ inline int BundleAdjustmentRun::solve_next_slice(int max_iterations) {
     active_[k] = !is_outlier(o, T_camera_world[o.keyframe], points_[o.point], nullptr);
   }
   return used;
+}
+
+inline bool BundleAdjustmentRun::solved_by_schur_lm() const {
+  if (settings_.backend != BundleAdjustmentBackend::schur_lm) return false;
+  std::vector<bool> counted(poses_.size(), false);
+  int free_poses = 0;
+  for (std::size_t k = 0; k < observations_.size(); ++k) {
+    const std::size_t i = static_cast<std::size_t>(observations_[k].keyframe);
+    if (!active_[k] || fixed_[i] || counted[i]) continue;
+    counted[i] = true;
+    ++free_poses;
+  }
+  return free_poses <= settings_.schur_lm_max_free_poses;
 }
 
 inline BundleAdjustmentRun::SliceOutcome BundleAdjustmentRun::solve_slice_ceres(bool robust, int slice_limit) {

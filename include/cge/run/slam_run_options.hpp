@@ -58,6 +58,8 @@ struct SlamRunOptions {
   std::string local_ba_solver = bundle_adjustment_backend_name(slam::LocalMappingSettings{}.bundle.backend);
   /// Tracking refinement solver: ceres | pose_lm (PoseRefinementSettings::backend).
   std::string tracking_solver = pose_refinement_backend_name(slam::TrackerSettings{}.refinement.backend);
+  /// Global BA solver after a loop correction: ceres | schur_lm (LoopCorrectionSettings::bundle).
+  std::string global_ba_solver = bundle_adjustment_backend_name(slam::LoopCorrectionSettings{}.bundle.backend);
   std::string map_maintenance = "all";  ///< all, none or a comma list of rules
   int keyframe_min_gap = slam::SystemSettings{}.orbslam2_keyframes.min_frame_gap;
   std::string loop_correction = "pgo+ba";  ///< none | pgo | pgo+ba

@@ -249,7 +249,14 @@ struct LoopCorrectionSettings {
   /// it, cge/slam/settings_from_orbslam2.hpp).
   double depth_sigma_per_m = 0.003;
   PoseGraphSettings pose_graph;
-  BundleAdjustmentSettings bundle;
+  /// Global BA on cge's own Schur LM (dense reduced system, Ceres' sparse Schur beyond
+  /// schur_lm_max_free_poses): on the main job's two corrections 25 / 307 ms against 157 / 1643 ms
+  /// with Ceres, the same loops and ATE to 1e-8 m (docs/OPTIMISATION.md).
+  BundleAdjustmentSettings bundle = [] {
+    BundleAdjustmentSettings b;
+    b.backend = BundleAdjustmentBackend::schur_lm;
+    return b;
+  }();
 
   /// Throws std::invalid_argument naming the bad field.
   void validate() const {
