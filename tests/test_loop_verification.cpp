@@ -318,3 +318,34 @@ TEST_CASE("two_nearest_descriptors equals cv::BFMatcher's two nearest, ties incl
   CHECK_THROWS_AS(cge::slam::two_nearest_descriptors(cv::Mat::zeros(2, 16, CV_8UC1), cv::Mat::zeros(2, 32, CV_8UC1)),
                   std::invalid_argument);
 }
+
+TEST_CASE("two_nearest_descriptors: the POPCNT row scan finds what the portable one finds", "[loops]") {
+  // Oracle: the portable scan (itself checked against cv::BFMatcher above, through whichever scan
+  // this CPU runs). Full-range bytes give distances across 0 .. 256; the few-values rows give ties.
+  if (!cge::slam::detail::nearest_two_popcnt_supported()) {
+    WARN("this CPU has no POPCNT: only the portable scan runs here");
+    return;
+  }
+#if CGE_NEAREST_TWO_HAVE_POPCNT
+  std::mt19937 rng(32);
+  for (const int values : {256, 3}) {
+    CAPTURE(values);
+    cv::Mat query(50, 32, CV_8UC1), train(500, 32, CV_8UC1);
+    for (cv::Mat* m : {&query, &train})
+      for (int r = 0; r < m->rows; ++r)
+        for (int c = 0; c < 32; ++c) m->at<std::uint8_t>(r, c) = static_cast<std::uint8_t>(rng() % values);
+    for (int q = 0; q < query.rows; ++q) {
+      CAPTURE(q);
+      for (const int rows : {0, 1, 2, 500}) {
+        const cv::Mat head = train.rowRange(0, rows);
+        const cge::slam::NearestTwo portable = cge::slam::detail::nearest_two_rows_portable(query.ptr<std::uint8_t>(q), head);
+        const cge::slam::NearestTwo popcnt = cge::slam::detail::nearest_two_rows_popcnt(query.ptr<std::uint8_t>(q), head);
+        CHECK(popcnt.best == portable.best);
+        CHECK(popcnt.best_index == portable.best_index);
+        CHECK(popcnt.second == portable.second);
+        CHECK(popcnt.second_index == portable.second_index);
+      }
+    }
+  }
+#endif
+}
