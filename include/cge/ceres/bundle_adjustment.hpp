@@ -102,8 +102,9 @@ struct BundleAdjustmentSettings : RobustRoundsSettings {
   BundleAdjustmentBackend backend = BundleAdjustmentBackend::ceres;
   /// With backend schur_lm: the most free poses a round gives cge's solver, count >= 1. Its
   /// reduced camera system is dense (6 unknowns a pose, factorised in O((6 n)^3)), so a round with
-  /// more free poses goes to Ceres with sparse_schur as set. Ours: 100 keyframes is twice the
-  /// largest global BA measured (53 keyframes, docs/OPTIMISATION.md), a 600 x 600 factorisation.
+  /// more free poses goes to Ceres with sparse_schur as set. Ours, on the safe side: on
+  /// loop_dynamic's global BAs the own solver was faster up to about 160 keyframes and slower from
+  /// about 230 (docs/OPTIMISATION.md).
   int schur_lm_max_free_poses = 100;
 
   BundleAdjustmentSettings() {
