@@ -235,8 +235,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"ceres", "pose_lm"}))
       ->capture_default_str();
   app.add_option("--global-ba-solver", opt.global_ba_solver,
-                 "the global BA after a loop correction: schur_lm (cge's own, dense reduced system; more than "
-                 "100 free keyframes go to Ceres' sparse Schur) or ceres; same rounds, iterations and tolerances")
+                 "the global BA after a loop correction: schur_lm (cge's own, dense reduced system; more than " +
+                     std::to_string(cge::slam::LoopCorrectionSettings{}.bundle.schur_lm_max_free_poses) +
+                     " free keyframes go to Ceres' sparse Schur) or ceres; same rounds, iterations and tolerances")
       ->check(CLI::IsMember({"ceres", "schur_lm"}))
       ->capture_default_str();
   app.add_option("--orb-spread", opt.orb_spread,
