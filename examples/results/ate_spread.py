@@ -1,0 +1,206 @@
+#!/usr/bin/env python3
+"""ATE spread of cge_slam on a TUM folder over a family of runs, beside ORB-SLAM2's run-to-run spread.
+
+Our pipeline is deterministic, so one run is one draw: on the real fr1/rpy slice a change of a few
+per cent in a setting with no true value moves mode YMK's ATE by several millimetres
+(docs/REAL_DATA.md). ORB-SLAM2 is not deterministic (three threads), so its runs differ by themselves.
+This script compares the two as distributions:
+- our family: each configuration at the default and at other weights of the tracking refinement's
+  depth term (--tracking-depth-sigma), spread evenly over 0.9x .. 1.1x of the run's own default
+  (1/bf from camera.yaml on TUM data; read back from the default run's summary.json);
+- the peer's family: as many ORB-SLAM2 runs (the peer kit's run.sh), one per round.
+Rounds alternate on the machine: round i runs the peer once, then every configuration at the i-th
+weight (round 1: the default, without the flag).
+
+Usage:
+  ate_spread.py --tools build/examples --dataset ../shared/data/tum_fr1_rpy_300 --out DIR
+                [--model ../shared/models/yolov8n-seg-320.onnx] [--orbslam2 PEER_DIR [--orbslam2-run run.sh]]
+                [--runs 9] [--jobs 2] [--force]
+Writes DIR/spread.json (every run) and DIR/spread.txt (the table, in Markdown), and prints the
+table. Exit code 2 for bad arguments (named), 1 when a run fails.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import statistics
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import results_peer  # noqa: E402  (beside this script)
+
+DEFAULT_PEER_RUN = Path(__file__).resolve().parents[2].parent / "shared" / "peers" / "orbslam2" / "run.sh"
+LOWEST, HIGHEST = 0.9, 1.1  # the family's weights, as multiples of the default
+
+
+class UsageError(Exception):
+    pass
+
+
+def configurations(model: Path | None) -> list[tuple[str, str, list[str]]]:
+    """(folder name, shown name, cge_slam flags): the modes of the real-data targets, and YMK with
+    YOLOv8-seg (the paper's rule and --semantic-instances dynamic) when a model is given."""
+    configs = [("none", "--mode none", ["--mode", "none", "--segmentation", "none"]),
+               ("ymk", "--mode YMK --segmentation none", ["--mode", "YMK", "--segmentation", "none"])]
+    if model is not None:
+        yolo = ["--mode", "YMK", "--segmentation", "yolo", "--model", str(model)]
+        configs.append(("ymk_yolo", "--mode YMK --segmentation yolo", yolo))
+        configs.append(("ymk_yolo_dynamic", "the same, --semantic-instances dynamic",
+                        yolo + ["--semantic-instances", "dynamic"]))
+    return configs
+
+
+def multipliers(runs: int) -> list[float]:
+    """1.0 (the default) first, then the other points of an even grid over LOWEST .. HIGHEST."""
+    if runs == 1:
+        return [1.0]
+    grid = [LOWEST + (HIGHEST - LOWEST) * i / (runs - 1) for i in range(runs)]
+    others = [m for m in grid if not math.isclose(m, 1.0)]
+    return [1.0] + others[:runs - 1]
+
+
+def run_ours(tools: Path, dataset: Path, flags: list[str], sigma: str | None, out: Path) -> dict:
+    argv = [str(tools / "cge_slam"), "--dataset", str(dataset), *flags, "--out", str(out), "--force"]
+    if sigma is not None:
+        argv += ["--tracking-depth-sigma", sigma]
+    done = subprocess.run(argv, capture_output=True, text=True)
+    if done.returncode != 0:
+        tail = (done.stderr.strip().splitlines() or ["no message"])[-1]
+        raise RuntimeError(f"{' '.join(argv)}: exit code {done.returncode}: {tail}")
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    ate = summary.get("ate") or {}
+    if "rmse_m" not in ate:
+        raise RuntimeError(f"{out}/summary.json: no ATE (does {dataset} have groundtruth.txt?)")
+    return {"tracking_depth_sigma": summary["mapping_settings"]["tracking_depth_sigma"],
+            "ate_rmse_m": ate["rmse_m"], "keyframes": summary["keyframes"], "out": str(out)}
+
+
+def spread_of(values: list[float]) -> dict:
+    return {"count": len(values), "mean": statistics.mean(values),
+            "sd": statistics.stdev(values) if len(values) > 1 else 0.0, "min": min(values), "max": max(values)}
+
+
+def table(result: dict) -> str:
+    peer = result.get("orbslam2")
+    peer_mean = peer["ate_rmse_m"]["mean"] if peer and peer.get("ate_rmse_m") else None
+    lines = ["| system | runs | ATE RMSE mean | sd | min - max | mean / ORB-SLAM2's | keyframes mean (min - max) |",
+             "|---|---|---|---|---|---|---|"]
+
+    def row(name: str, ate: dict, keyframes: dict) -> str:
+        ratio = f"{ate['mean'] / peer_mean:.2f}x" if peer_mean else "-"
+        return (f"| {name} | {ate['count']} | {1000 * ate['mean']:.1f} mm | {1000 * ate['sd']:.1f} mm | "
+                f"{1000 * ate['min']:.1f} - {1000 * ate['max']:.1f} mm | {ratio} | "
+                f"{keyframes['mean']:.1f} ({keyframes['min']:g} - {keyframes['max']:g}) |")
+
+    if peer_mean:
+        lines.append(row("ORB-SLAM2", peer["ate_rmse_m"], peer["keyframes"]))
+    for config in result["configurations"]:
+        lines.append(row(f"cge_slam {config['name']}", config["ate_rmse_m"], config["keyframes"]))
+    return "\n".join(lines) + "\n"
+
+
+def parse_arguments(argv: list[str]) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--tools", required=True, type=Path, help="folder with cge_slam and cge_eval")
+    parser.add_argument("--dataset", required=True, type=Path, help="TUM folder with groundtruth.txt")
+    parser.add_argument("--out", required=True, type=Path, help="output folder (runs/, spread.json, spread.txt)")
+    parser.add_argument("--model", type=Path, help="YOLOv8-seg ONNX model: adds the two YMK yolo configurations")
+    parser.add_argument("--orbslam2", type=Path, help="the folder the peer kit's build.sh made")
+    parser.add_argument("--orbslam2-run", type=Path, default=DEFAULT_PEER_RUN, help="the peer kit's run.sh")
+    parser.add_argument("--runs", type=int, default=9, help="runs per configuration (and of the peer), 1 .. 50")
+    parser.add_argument("--jobs", type=int, default=2, help="our runs at once within a round, 1 .. 16")
+    parser.add_argument("--force", action="store_true", help="write into a non-empty --out")
+    args = parser.parse_args(argv)
+    if not 1 <= args.runs <= 50:
+        raise UsageError(f"--runs {args.runs}: give 1 .. 50")
+    if not 1 <= args.jobs <= 16:
+        raise UsageError(f"--jobs {args.jobs}: give 1 .. 16")
+    for tool in ("cge_slam", "cge_eval"):
+        if not (args.tools / tool).is_file():
+            raise UsageError(f"--tools {args.tools}: no {tool} there (build the project first)")
+    for name in ("rgb.txt", "depth.txt", "groundtruth.txt"):
+        if not (args.dataset / name).is_file():
+            raise UsageError(f"--dataset {args.dataset}: no {name} (a TUM RGB-D folder with ground truth)")
+    if args.model is not None and not args.model.is_file():
+        raise UsageError(f"--model {args.model}: not found")
+    if args.orbslam2 is not None:
+        problem = results_peer.check_peer(args.orbslam2.resolve(), args.orbslam2_run.resolve())
+        if problem:
+            raise UsageError(problem)
+    if args.out.exists() and (not args.out.is_dir() or (any(args.out.iterdir()) and not args.force)):
+        raise UsageError(f"--out {args.out}: exists and is not an empty folder (give --force to write into it)")
+    return args
+
+
+def main(argv: list[str]) -> int:
+    try:
+        args = parse_arguments(argv)
+    except UsageError as e:
+        print(f"ate_spread.py: {e}", file=sys.stderr)
+        return 2
+    tools, dataset = args.tools.resolve(), args.dataset.resolve()
+    configs = configurations(args.model.resolve() if args.model else None)
+    peer = (results_peer.Peer(args.orbslam2.resolve(), args.orbslam2_run.resolve())
+            if args.orbslam2 is not None else None)
+    runs_dir = args.out / "runs"
+    runs_dir.mkdir(parents=True, exist_ok=True)
+
+    def evaluate(kind: str, estimate: Path) -> dict:
+        done = subprocess.run([str(tools / "cge_eval"), kind, str(dataset / "groundtruth.txt"), str(estimate),
+                               "--json"], capture_output=True, text=True)
+        if done.returncode != 0:
+            raise RuntimeError(done.stderr)
+        return json.loads(done.stdout)
+
+    ours: dict[str, list[dict]] = {name: [] for _, name, _ in configs}
+    peer_runs: list[dict] = []
+    default_sigma = None
+    try:
+        for i, m in enumerate(multipliers(args.runs)):
+            if peer is not None:
+                out = runs_dir / f"orbslam2_{i + 1}"
+                results_peer.run_peer(peer, dataset, out)
+                peer_runs.append(results_peer.read_peer_run(out, evaluate))
+            sigma = None if i == 0 else f"{default_sigma * m:.6g}"
+            tasks = [(name, flags, runs_dir / f"{key}_{i + 1}") for key, name, flags in configs]
+            with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+                done = list(pool.map(lambda t: run_ours(tools, dataset, t[1], sigma, t[2]), tasks))
+            for (name, _, _), run in zip(tasks, done):
+                run["multiplier"] = m
+                ours[name].append(run)
+            if i == 0:
+                default_sigma = done[0]["tracking_depth_sigma"]
+            print(f"round {i + 1}: tracking depth sigma {done[0]['tracking_depth_sigma']:g}: " +
+                  ", ".join(f"{name} {1000 * r['ate_rmse_m']:.1f} mm" for (name, _, _), r in zip(tasks, done)),
+                  flush=True)
+    except RuntimeError as e:
+        print(f"ate_spread.py: {e}", file=sys.stderr)
+        return 1
+
+    result = {"dataset": str(args.dataset), "runs": args.runs, "default_tracking_depth_sigma": default_sigma,
+              "weights": [LOWEST, HIGHEST], "configurations": []}
+    for _, name, flags in configs:
+        runs = ours[name]
+        result["configurations"].append({
+            "name": name, "flags": flags, "runs": runs,
+            "ate_rmse_m": spread_of([r["ate_rmse_m"] for r in runs]),
+            "keyframes": spread_of([r["keyframes"] for r in runs])})
+    if peer is not None:
+        good = [r for r in peer_runs if "error" not in r]
+        result["orbslam2"] = {"runs": peer_runs, "failed": len(peer_runs) - len(good)}
+        if good:
+            result["orbslam2"]["ate_rmse_m"] = spread_of([r["ate_rmse_m"] for r in good])
+            result["orbslam2"]["keyframes"] = spread_of([r["keyframes"] for r in good])
+    text = table(result)
+    (args.out / "spread.json").write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
+    (args.out / "spread.txt").write_text(text, encoding="utf-8")
+    print(text, end="")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
