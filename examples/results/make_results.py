@@ -6,12 +6,15 @@ pipeline on it (cge_slam), evaluates the runs (cge_eval), studies the entropy me
 scenes (cge_loop_study), and writes RESULTS.md with its PNG figures. Given the ORB-SLAM2 peer
 (--orbslam2, the folder the peer kit's build.sh made), it also runs the original ORB-SLAM2 on the
 walking and sitting presets and on the real TUM slice, alternating with our runs where times are
-compared. The suite only calls the command-line tools and reads the files they write, so every
-number here can be reproduced by hand with the commands listed in RESULTS.md.
+compared. On the real slice it also measures the ATE over families of runs (ate_spread.py), since
+one run of our deterministic pipeline is one draw. The suite only calls the command-line tools and
+reads the files they write, so every number here can be reproduced by hand with the commands
+listed in RESULTS.md.
 
 Usage (docs/RESULTS.md):
     make_results.py --tools BUILD/examples --out docs [--work BUILD/results] [--quick]
                     [--orbslam2 PEER_DIR [--orbslam2-run run.sh] [--orbslam2-runs 3]] [--real-data DIR|none]
+                    [--spread-runs 9]
 
 --quick runs short sequences: it checks that the suite works (CI), its numbers mean little.
 Exit codes: 0 success, 1 a tool failed (its command and message are printed), 2 bad arguments.
@@ -33,7 +36,8 @@ from functools import partial
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import results_peer  # noqa: E402  (beside this file)
+import ate_spread  # noqa: E402  (beside this file)
+import results_peer  # noqa: E402
 import results_stamps  # noqa: E402
 import results_plots  # noqa: E402
 import results_report  # noqa: E402
@@ -333,6 +337,22 @@ def compared_runs(runner: Runner, plan: Plan, peer: results_peer.Peer | None, pe
     return result
 
 
+def real_data_spread(runner: Runner, real_data: Path, peer: results_peer.Peer | None, runs: int,
+                     jobs: int) -> dict:
+    """ate_spread.py on the real slice: our modes none and YMK over a family of depth-term weights, and
+    as many ORB-SLAM2 runs, alternating (a single run of ours is a single draw)."""
+    out = runner.work / "spread"
+    argv = ["--tools", str(runner.tools), "--dataset", str(real_data), "--out", str(out), "--runs", str(runs),
+            "--jobs", str(jobs), "--force"]
+    if peer is not None:
+        argv += ["--orbslam2", str(peer.folder), "--orbslam2-run", str(peer.run_script)]
+    shown = [a.replace(str(runner.tools), "BUILD/examples") for a in argv]  # as the other tools are shown
+    runner.log(runner.shown(["python3", "examples/results/ate_spread.py", *shown]))
+    if ate_spread.main(argv) != 0:
+        raise ToolError(f"ate_spread.py {' '.join(argv)} failed (its message is above)")
+    return json.loads((out / "spread.json").read_text(encoding="utf-8"))
+
+
 def loop_runs(runner: Runner, plan: Plan, vocabulary: Path, jobs: int) -> dict:
     """Each loop scene with each loop scoring (mode YMK, pose graph + bundle adjustment), and the
     precision-recall curve over the acceptance threshold of each run's accepted loops."""
@@ -406,6 +426,9 @@ def main() -> int:
                         help=f"the peer kit's run.sh (default: {DEFAULT_PEER_RUN})")
     parser.add_argument("--orbslam2-runs", type=int, default=None,
                         help="ORB-SLAM2 runs per sequence (it is not deterministic; default 3, 1 with --quick)")
+    parser.add_argument("--spread-runs", type=int, default=9,
+                        help="runs per family of the ATE spread on the real slice (ate_spread.py; our modes none "
+                             "and YMK and ORB-SLAM2 when given; 0: skip; default 9, about 4 minutes)")
     parser.add_argument("--real-data", default=None, metavar="DIR|none",
                         help="a real TUM folder our pipeline (and the peer) also run on; default "
                              f"{DEFAULT_REAL_DATA} when it exists, none with --quick")
@@ -421,6 +444,9 @@ def main() -> int:
     peer_runs = args.orbslam2_runs if args.orbslam2_runs is not None else (1 if args.quick else 3)
     if peer_runs < 1:
         print("make_results.py: --orbslam2-runs must be at least 1", file=sys.stderr)
+        return 2
+    if not 0 <= args.spread_runs <= 50:
+        print("make_results.py: --spread-runs must lie in 0 .. 50", file=sys.stderr)
         return 2
     peer = None
     if args.orbslam2 is not None:
@@ -477,6 +503,13 @@ def main() -> int:
         compared = compared_runs(runner, plan, peer, peer_runs, real_data, args.jobs)
         steps["ORB-SLAM2 and compared runs"] = time.monotonic() - t
 
+        spread = None
+        if real_data is not None and args.spread_runs > 0:
+            t = time.monotonic()
+            print(f"ATE spread on the real slice ({args.spread_runs} runs each)", flush=True)
+            spread = real_data_spread(runner, real_data, peer, args.spread_runs, min(args.jobs, 16))
+            steps["real-data ATE spread"] = time.monotonic() - t
+
         t = time.monotonic()
         print("loop scenes x loop scorings", flush=True)
         loops = loop_runs(runner, plan, vocabulary, args.jobs)
@@ -506,7 +539,8 @@ def main() -> int:
         commands=runner.commands, walking_presets=WALKING_PRESETS, modes=MODES, loop_presets=LOOP_PRESETS,
         loop_scorings=LOOP_SCORINGS, low_dynamic_presets=LOW_DYNAMIC_PRESETS, compared=compared,
         peer_ran=peer is not None, real_data=real_data.name if real_data is not None else None,
-        real_data_modes=REAL_DATA_MODES, tracking_stages=TRACKING_STAGES, reused=runner.reused)
+        real_data_modes=REAL_DATA_MODES, tracking_stages=TRACKING_STAGES, reused=runner.reused,
+        real_data_spread=spread)
     report = out / "RESULTS.md"
     tmp = report.with_suffix(".md.tmp")
     tmp.write_text(results_report.render(context), encoding="utf-8")
