@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import statistics
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -33,7 +32,6 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import results_peer  # noqa: E402  (beside this script)
 
-DEFAULT_PEER_RUN = Path(__file__).resolve().parents[2].parent / "shared" / "peers" / "orbslam2" / "run.sh"
 LOWEST, HIGHEST = 0.9, 1.1  # the family's weights, as multiples of the default
 
 
@@ -55,7 +53,8 @@ def configurations(model: Path | None) -> list[tuple[str, str, list[str]]]:
 
 
 def multipliers(runs: int) -> list[float]:
-    """1.0 (the default) first, then the other points of an even grid over LOWEST .. HIGHEST."""
+    """1.0 (the default) first, then the other points of an even grid of `runs` points over LOWEST ..
+    HIGHEST (with an even count the grid misses 1.0, and its highest point is left out)."""
     if runs == 1:
         return [1.0]
     grid = [LOWEST + (HIGHEST - LOWEST) * i / (runs - 1) for i in range(runs)]
@@ -77,11 +76,6 @@ def run_ours(tools: Path, dataset: Path, flags: list[str], sigma: str | None, ou
         raise RuntimeError(f"{out}/summary.json: no ATE (does {dataset} have groundtruth.txt?)")
     return {"tracking_depth_sigma": summary["mapping_settings"]["tracking_depth_sigma"],
             "ate_rmse_m": ate["rmse_m"], "keyframes": summary["keyframes"], "out": str(out)}
-
-
-def spread_of(values: list[float]) -> dict:
-    return {"count": len(values), "mean": statistics.mean(values),
-            "sd": statistics.stdev(values) if len(values) > 1 else 0.0, "min": min(values), "max": max(values)}
 
 
 def table(result: dict) -> str:
@@ -110,7 +104,7 @@ def parse_arguments(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--out", required=True, type=Path, help="output folder (runs/, spread.json, spread.txt)")
     parser.add_argument("--model", type=Path, help="YOLOv8-seg ONNX model: adds the two YMK yolo configurations")
     parser.add_argument("--orbslam2", type=Path, help="the folder the peer kit's build.sh made")
-    parser.add_argument("--orbslam2-run", type=Path, default=DEFAULT_PEER_RUN, help="the peer kit's run.sh")
+    parser.add_argument("--orbslam2-run", type=Path, default=results_peer.DEFAULT_RUN_SCRIPT, help="the peer kit's run.sh")
     parser.add_argument("--runs", type=int, default=9, help="runs per configuration (and of the peer), 1 .. 50")
     parser.add_argument("--jobs", type=int, default=2, help="our runs at once within a round, 1 .. 16")
     parser.add_argument("--force", action="store_true", help="write into a non-empty --out")
@@ -187,14 +181,14 @@ def main(argv: list[str]) -> int:
         runs = ours[name]
         result["configurations"].append({
             "name": name, "flags": flags, "runs": runs,
-            "ate_rmse_m": spread_of([r["ate_rmse_m"] for r in runs]),
-            "keyframes": spread_of([r["keyframes"] for r in runs])})
+            "ate_rmse_m": results_peer.spread([r["ate_rmse_m"] for r in runs]),
+            "keyframes": results_peer.spread([r["keyframes"] for r in runs])})
     if peer is not None:
         good = [r for r in peer_runs if "error" not in r]
         result["orbslam2"] = {"runs": peer_runs, "failed": len(peer_runs) - len(good)}
         if good:
-            result["orbslam2"]["ate_rmse_m"] = spread_of([r["ate_rmse_m"] for r in good])
-            result["orbslam2"]["keyframes"] = spread_of([r["keyframes"] for r in good])
+            result["orbslam2"]["ate_rmse_m"] = results_peer.spread([r["ate_rmse_m"] for r in good])
+            result["orbslam2"]["keyframes"] = results_peer.spread([r["keyframes"] for r in good])
     text = table(result)
     (args.out / "spread.json").write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
     (args.out / "spread.txt").write_text(text, encoding="utf-8")

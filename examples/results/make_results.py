@@ -44,7 +44,6 @@ import results_report  # noqa: E402
 
 # The peer kit and the real TUM slice live beside the project, in ../shared, when it is there.
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
-DEFAULT_PEER_RUN = PROJECT_ROOT.parent / "shared" / "peers" / "orbslam2" / "run.sh"
 DEFAULT_REAL_DATA = PROJECT_ROOT.parent / "shared" / "data" / "tum_fr1_rpy_300"
 
 WALKING_PRESETS = ["walking_xyz", "walking_halfsphere", "walking_rpy", "walking_static"]
@@ -422,13 +421,13 @@ def main() -> int:
     parser.add_argument("--orbslam2", type=Path, metavar="PEER_DIR",
                         help="the ORB-SLAM2 peer (the folder the peer kit's build.sh made); without it the "
                              "ORB-SLAM2 columns say 'not run'")
-    parser.add_argument("--orbslam2-run", type=Path, default=DEFAULT_PEER_RUN, metavar="RUN_SH",
-                        help=f"the peer kit's run.sh (default: {DEFAULT_PEER_RUN})")
+    parser.add_argument("--orbslam2-run", type=Path, default=results_peer.DEFAULT_RUN_SCRIPT, metavar="RUN_SH",
+                        help=f"the peer kit's run.sh (default: {results_peer.DEFAULT_RUN_SCRIPT})")
     parser.add_argument("--orbslam2-runs", type=int, default=None,
                         help="ORB-SLAM2 runs per sequence (it is not deterministic; default 3, 1 with --quick)")
     parser.add_argument("--spread-runs", type=int, default=9,
                         help="runs per family of the ATE spread on the real slice (ate_spread.py; our modes none "
-                             "and YMK and ORB-SLAM2 when given; 0: skip; default 9, about 4 minutes)")
+                             "and YMK and ORB-SLAM2 when given; 0: skip; default 9, about 3 minutes with ORB-SLAM2)")
     parser.add_argument("--real-data", default=None, metavar="DIR|none",
                         help="a real TUM folder our pipeline (and the peer) also run on; default "
                              f"{DEFAULT_REAL_DATA} when it exists, none with --quick")

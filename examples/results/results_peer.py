@@ -10,9 +10,13 @@ from __future__ import annotations
 import math
 import os
 import re
+import statistics
 import subprocess
 from dataclasses import dataclass
 from pathlib import Path
+
+# The peer kit's run.sh where it sits beside the checkout (../shared).
+DEFAULT_RUN_SCRIPT = Path(__file__).resolve().parents[2].parent / "shared" / "peers" / "orbslam2" / "run.sh"
 
 # Where build.sh puts the RGB-D example inside its destination folder.
 RGBD_TUM = Path("ORB_SLAM2") / "Examples" / "RGB-D" / "rgbd_tum"
@@ -100,12 +104,14 @@ def last_line(error: Exception) -> str:
 
 
 def spread(values: list) -> dict | None:
-    """Mean, minimum and maximum of the finite numbers among values; None when there are none."""
+    """Mean, sample standard deviation (0 for one number), minimum and maximum of the finite numbers
+    among values; None when there are none."""
     numbers = [float(v) for v in values
                if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(float(v))]
     if not numbers:
         return None
-    return {"mean": sum(numbers) / len(numbers), "min": min(numbers), "max": max(numbers), "count": len(numbers)}
+    return {"mean": sum(numbers) / len(numbers), "sd": statistics.stdev(numbers) if len(numbers) > 1 else 0.0,
+            "min": min(numbers), "max": max(numbers), "count": len(numbers)}
 
 
 SUMMARISED = ("ate_rmse_m", "ate_std_m", "rpe_translation_rmse_m", "rpe_rotation_rmse_deg", "keyframes",

@@ -147,6 +147,8 @@ class Summaries(unittest.TestCase):
                 {"error": "run.sh exit 1: crashed"}, {"ate_rmse_m": 0.1, "keyframes": 32}]
         s = self.peer.summarise(runs)
         self.assertAlmostEqual(s["ate_rmse_m"]["mean"], 0.4)
+        self.assertAlmostEqual(s["ate_rmse_m"]["sd"], 0.3)  # sample sd of 0.4, 0.7, 0.1
+        self.assertEqual(self.peer.spread([0.5])["sd"], 0.0)
         self.assertEqual((s["ate_rmse_m"]["min"], s["ate_rmse_m"]["max"], s["ate_rmse_m"]["count"]), (0.1, 0.7, 3))
         self.assertEqual(s["keyframes"]["mean"], 32)
         self.assertEqual((s["runs"], s["failed"]), (4, 1))
