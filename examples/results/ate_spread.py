@@ -1,21 +1,24 @@
 #!/usr/bin/env python3
 """ATE spread of cge_slam on a TUM folder over a family of runs, beside ORB-SLAM2's run-to-run spread.
 
-Our pipeline is deterministic, so one run is one draw: on the real fr1/rpy slice a change of a few
-per cent in a setting with no true value moves mode YMK's ATE by several millimetres
+Our pipeline is deterministic, so one run is one draw: on the real fr1/rpy slice a small change to
+the input or to a setting with no true value moves mode YMK's ATE by several millimetres
 (docs/REAL_DATA.md). ORB-SLAM2 is not deterministic (three threads), so its runs differ by themselves.
-This script compares the two as distributions:
-- our family: each configuration at the default and at other weights of the tracking refinement's
-  depth term (--tracking-depth-sigma), spread evenly over 0.9x .. 1.1x of the run's own default
-  (1/bf from camera.yaml on TUM data; read back from the default run's summary.json);
-- the peer's family: as many ORB-SLAM2 runs (the peer kit's run.sh), one per round.
-Rounds alternate on the machine: round i runs the peer once, then every configuration at the i-th
-weight (round 1: the default, without the flag).
+This script compares the two as distributions, over one of two families (--family):
+- start_offset (default): round i starts both systems i frames into the sequence (rgb.txt and
+  depth.txt cut, everything else linked, under OUT/datasets/); the same input for both, and a
+  perturbation of the whole run (the first keyframe, every interval's phase);
+- depth_sigma: our runs at the default and at other weights of the tracking refinement's depth term
+  (--tracking-depth-sigma), spread evenly over 0.9x .. 1.1x of the run's own default (1/bf from
+  camera.yaml on TUM data; read back from the default run's summary.json); the peer on the whole
+  sequence each round. A milder perturbation: on the real slice it shows about half the spread.
+Rounds alternate on the machine: round i runs the peer once, then every configuration (round 1: the
+whole sequence at the default).
 
 Usage:
   ate_spread.py --tools build/examples --dataset ../shared/data/tum_fr1_rpy_300 --out DIR
-                [--model ../shared/models/yolov8n-seg-320.onnx] [--orbslam2 PEER_DIR [--orbslam2-run run.sh]]
-                [--runs 9] [--jobs 2] [--force]
+                [--family start_offset|depth_sigma] [--model ../shared/models/yolov8n-seg-320.onnx]
+                [--orbslam2 PEER_DIR [--orbslam2-run run.sh]] [--runs 9] [--jobs 2] [--force]
 Writes DIR/spread.json (every run) and DIR/spread.txt (the table, in Markdown), and prints the
 table. Exit code 2 for bad arguments (named), 1 when a run fails.
 """
@@ -32,7 +35,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import results_peer  # noqa: E402  (beside this script)
 
-LOWEST, HIGHEST = 0.9, 1.1  # the family's weights, as multiples of the default
+LOWEST, HIGHEST = 0.9, 1.1  # the depth_sigma family's weights, as multiples of the default
+FAMILIES = ("start_offset", "depth_sigma")
+ASSOCIATION_GAP_S = 0.02  # TUM's associate.py: a depth frame pairs with a colour frame within this gap
 
 
 class UsageError(Exception):
@@ -62,6 +67,42 @@ def multipliers(runs: int) -> list[float]:
     return [1.0] + others[:runs - 1]
 
 
+def data_lines(path: Path) -> list[str]:
+    return [line for line in path.read_text(encoding="utf-8").splitlines() if line.strip() and not line.startswith("#")]
+
+
+def is_time_stamp(text: str) -> bool:
+    try:
+        return math.isfinite(float(text))
+    except ValueError:
+        return False
+
+
+def offset_dataset(dataset: Path, offset: int, folder: Path) -> Path:
+    """`dataset` without its first `offset` colour frames. rgb.txt loses its first `offset` entries;
+    depth.txt keeps the entries from ASSOCIATION_GAP_S before the first colour frame kept on, so the
+    frames kept pair as before; every other entry of the folder is linked. Offset 0: `dataset` itself."""
+    if offset == 0:
+        return dataset
+    folder.mkdir(parents=True, exist_ok=True)
+    for entry in sorted(dataset.iterdir()):
+        if entry.name not in ("rgb.txt", "depth.txt"):
+            link = folder / entry.name
+            if link.is_symlink() or link.exists():
+                link.unlink()
+            link.symlink_to(entry.resolve())
+
+    def comments(path: Path) -> list[str]:
+        return [line for line in path.read_text(encoding="utf-8").splitlines() if line.startswith("#")]
+
+    rgb = data_lines(dataset / "rgb.txt")[offset:]
+    first = float(rgb[0].split()[0])
+    depth = [line for line in data_lines(dataset / "depth.txt") if float(line.split()[0]) >= first - ASSOCIATION_GAP_S]
+    (folder / "rgb.txt").write_text("\n".join(comments(dataset / "rgb.txt") + rgb) + "\n", encoding="utf-8")
+    (folder / "depth.txt").write_text("\n".join(comments(dataset / "depth.txt") + depth) + "\n", encoding="utf-8")
+    return folder
+
+
 def run_ours(tools: Path, dataset: Path, flags: list[str], sigma: str | None, out: Path) -> dict:
     argv = [str(tools / "cge_slam"), "--dataset", str(dataset), *flags, "--out", str(out), "--force"]
     if sigma is not None:
@@ -75,7 +116,21 @@ def run_ours(tools: Path, dataset: Path, flags: list[str], sigma: str | None, ou
     if "rmse_m" not in ate:
         raise RuntimeError(f"{out}/summary.json: no ATE (does {dataset} have groundtruth.txt?)")
     return {"tracking_depth_sigma": summary["mapping_settings"]["tracking_depth_sigma"],
-            "ate_rmse_m": ate["rmse_m"], "keyframes": summary["keyframes"], "out": str(out)}
+            "frames": summary["frames"], "ate_rmse_m": ate["rmse_m"], "keyframes": summary["keyframes"],
+            "out": str(out)}
+
+
+def describe(result: dict) -> str:
+    """One sentence on the family a result was measured over, for reports."""
+    if result.get("family", "depth_sigma") == "start_offset":
+        first, last = result.get("start_offsets", [0, result["runs"] - 1])
+        return (f"round i starts both systems i frames into the sequence ({first} .. {last} frames skipped), "
+                "so every run sees the same input as its round's ORB-SLAM2 run")
+    low, high = result.get("weights", [LOWEST, HIGHEST])
+    sigma = result.get("default_tracking_depth_sigma")
+    shown = f" {sigma:.4g} 1/m" if isinstance(sigma, (int, float)) else ""
+    return (f"our runs at the default and at other weights of the tracking's depth term "
+            f"(`--tracking-depth-sigma`, evenly over {low:g}x-{high:g}x of the default{shown})")
 
 
 def table(result: dict) -> str:
@@ -102,6 +157,9 @@ def parse_arguments(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--tools", required=True, type=Path, help="folder with cge_slam and cge_eval")
     parser.add_argument("--dataset", required=True, type=Path, help="TUM folder with groundtruth.txt")
     parser.add_argument("--out", required=True, type=Path, help="output folder (runs/, spread.json, spread.txt)")
+    parser.add_argument("--family", choices=FAMILIES, default=FAMILIES[0],
+                        help="start_offset: round i starts i frames in (default); depth_sigma: round i at another "
+                             "weight of the tracking's depth term")
     parser.add_argument("--model", type=Path, help="YOLOv8-seg ONNX model: adds the two YMK yolo configurations")
     parser.add_argument("--orbslam2", type=Path, help="the folder the peer kit's build.sh made")
     parser.add_argument("--orbslam2-run", type=Path, default=results_peer.DEFAULT_RUN_SCRIPT, help="the peer kit's run.sh")
@@ -119,6 +177,16 @@ def parse_arguments(argv: list[str]) -> argparse.Namespace:
     for name in ("rgb.txt", "depth.txt", "groundtruth.txt"):
         if not (args.dataset / name).is_file():
             raise UsageError(f"--dataset {args.dataset}: no {name} (a TUM RGB-D folder with ground truth)")
+    if args.family == "start_offset":
+        for name in ("rgb.txt", "depth.txt"):  # offset_dataset reads their time stamps
+            path = args.dataset / name
+            for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+                if line.strip() and not line.startswith("#") and not is_time_stamp(line.split()[0]):
+                    raise UsageError(f"{path}:{number}: '{line.split()[0]}' is not a time stamp in seconds")
+        frames = len(data_lines(args.dataset / "rgb.txt"))
+        if args.runs - 1 > frames // 2:
+            raise UsageError(f"--runs {args.runs}: the start_offset family would skip up to {args.runs - 1} of the "
+                             f"{frames} frames of {args.dataset / 'rgb.txt'}; give at most {frames // 2 + 1} runs")
     if args.model is not None and not args.model.is_file():
         raise UsageError(f"--model {args.model}: not found")
     if args.orbslam2 is not None:
@@ -142,6 +210,7 @@ def main(argv: list[str]) -> int:
             if args.orbslam2 is not None else None)
     runs_dir = args.out / "runs"
     runs_dir.mkdir(parents=True, exist_ok=True)
+    by_offset = args.family == "start_offset"
 
     def evaluate(kind: str, estimate: Path) -> dict:
         done = subprocess.run([str(tools / "cge_eval"), kind, str(dataset / "groundtruth.txt"), str(estimate),
@@ -155,28 +224,37 @@ def main(argv: list[str]) -> int:
     default_sigma = None
     try:
         for i, m in enumerate(multipliers(args.runs)):
+            offset = i if by_offset else 0
+            data = offset_dataset(dataset, offset, args.out / "datasets" / f"offset_{offset}")
             if peer is not None:
                 out = runs_dir / f"orbslam2_{i + 1}"
-                results_peer.run_peer(peer, dataset, out)
-                peer_runs.append(results_peer.read_peer_run(out, evaluate))
-            sigma = None if i == 0 else f"{default_sigma * m:.6g}"
+                results_peer.run_peer(peer, data, out)
+                peer_run = results_peer.read_peer_run(out, evaluate)
+                peer_run["start_offset"] = offset
+                peer_runs.append(peer_run)
+            sigma = None if i == 0 or by_offset else f"{default_sigma * m:.6g}"
             tasks = [(name, flags, runs_dir / f"{key}_{i + 1}") for key, name, flags in configs]
             with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-                done = list(pool.map(lambda t: run_ours(tools, dataset, t[1], sigma, t[2]), tasks))
+                done = list(pool.map(lambda t: run_ours(tools, data, t[1], sigma, t[2]), tasks))
             for (name, _, _), run in zip(tasks, done):
-                run["multiplier"] = m
+                run["start_offset"] = offset
+                run["multiplier"] = 1.0 if by_offset else m
                 ours[name].append(run)
             if i == 0:
                 default_sigma = done[0]["tracking_depth_sigma"]
-            print(f"round {i + 1}: tracking depth sigma {done[0]['tracking_depth_sigma']:g}: " +
+            print(f"round {i + 1}: start offset {offset}, tracking depth sigma {done[0]['tracking_depth_sigma']:g}: " +
                   ", ".join(f"{name} {1000 * r['ate_rmse_m']:.1f} mm" for (name, _, _), r in zip(tasks, done)),
                   flush=True)
     except RuntimeError as e:
         print(f"ate_spread.py: {e}", file=sys.stderr)
         return 1
 
-    result = {"dataset": str(args.dataset), "runs": args.runs, "default_tracking_depth_sigma": default_sigma,
-              "weights": [LOWEST, HIGHEST], "configurations": []}
+    result = {"dataset": str(args.dataset), "runs": args.runs, "family": args.family,
+              "default_tracking_depth_sigma": default_sigma, "configurations": []}
+    if by_offset:
+        result["start_offsets"] = [0, args.runs - 1]
+    else:
+        result["weights"] = [LOWEST, HIGHEST]
     for _, name, flags in configs:
         runs = ours[name]
         result["configurations"].append({

@@ -338,8 +338,8 @@ def compared_runs(runner: Runner, plan: Plan, peer: results_peer.Peer | None, pe
 
 def real_data_spread(runner: Runner, real_data: Path, peer: results_peer.Peer | None, runs: int,
                      jobs: int) -> dict:
-    """ate_spread.py on the real slice: our modes none and YMK over a family of depth-term weights, and
-    as many ORB-SLAM2 runs, alternating (a single run of ours is a single draw)."""
+    """ate_spread.py on the real slice: our modes none and YMK and ORB-SLAM2 over its default family
+    (start offsets), alternating round by round (a single run of ours is a single draw)."""
     out = runner.work / "spread"
     argv = ["--tools", str(runner.tools), "--dataset", str(real_data), "--out", str(out), "--runs", str(runs),
             "--jobs", str(jobs), "--force"]

@@ -300,13 +300,10 @@ def real_data_spread(ctx: Context) -> list[str]:
     result = ctx.real_data_spread
     if not result:
         return []
-    sigma = result.get("default_tracking_depth_sigma")
-    low, high = result.get("weights", [0.9, 1.1])
     lines = [f"### {ctx.real_data}: ATE over families of runs", "",
-             "Our runs are deterministic, so each cell above is a single draw; on these real frames a few per cent "
-             "of a setting moves YMK's ATE by millimetres. Here each mode runs at the default and at other "
-             f"weights of the tracking's depth term (`--tracking-depth-sigma`, evenly over {low:g}x-{high:g}x of "
-             f"the default {num(sigma, 4)} 1/m), and ORB-SLAM2 as many times, alternating "
+             "Our runs are deterministic, so each cell above is a single draw; on these real frames a small change "
+             "to the input or to a setting moves YMK's ATE by millimetres. Here each mode runs as a family: "
+             f"{ate_spread.describe(result)}; ORB-SLAM2 runs as many times, alternating "
              "(`examples/results/ate_spread.py`; docs/REAL_DATA.md has the same with YOLOv8-seg).", ""]
     lines += ate_spread.table(result).splitlines()
     return lines + [""]

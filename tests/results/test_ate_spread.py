@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Test of examples/results/ate_spread.py on a short rendered sequence (written by cge_sim).
 
-The oracle: the family's weights are recomputed here from the default run's summary.json, and the
-table's statistics from each run's own summary.json with this file's arithmetic; bad arguments must
-exit with code 2 and name the argument, leaving a non-empty --out untouched.
+The oracle: for the start_offset family each run's frame count and its cut rgb.txt / depth.txt are
+checked against the sequence's own lists; for the depth_sigma family the weights are recomputed here
+from the default run's summary.json; for both the table's statistics are recomputed from each run's
+own summary.json with this file's arithmetic. Bad arguments must exit with code 2 and name the
+argument, leaving a non-empty --out untouched.
 
 Usage: test_ate_spread.py --script ate_spread.py --tools DIR_WITH_cge_slam_cge_eval --sim cge_sim --work DIR
 """
@@ -37,6 +39,13 @@ def main() -> int:
     sequence = work / "sequence"
     subprocess.run([str(args.sim), "--preset", "walking_xyz", "--frames", "20", "--seed", "3", "--out", str(sequence)],
                    check=True, capture_output=True)
+    # Depth stamped 10 ms before colour, as a real Kinect's often is: the start_offset family must
+    # keep the depth frame that pairs with the first colour frame it keeps.
+    depth_list = sequence / "depth.txt"
+    depth_list.write_text("".join(
+        line + "\n" if line.startswith("#") or not line.strip()
+        else f"{float(line.split()[0]) - 0.01:.6f} {' '.join(line.split()[1:])}\n"
+        for line in depth_list.read_text().splitlines()))
 
     def spread(*extra: str) -> subprocess.CompletedProcess:
         return subprocess.run([sys.executable, str(args.script), "--tools", str(args.tools), "--dataset",
@@ -50,22 +59,77 @@ def main() -> int:
                          (["--jobs", "17", "--out", str(work / "a")], "--jobs"),
                          (["--model", str(work / "none.onnx"), "--out", str(work / "a")], "--model"),
                          (["--orbslam2", str(work / "no_peer"), "--out", str(work / "a")], "--orbslam2"),
+                         (["--family", "seeds", "--out", str(work / "a")], "--family"),
+                         (["--runs", "12", "--out", str(work / "a")], "--runs"),  # 11 of 20 frames skipped
                          (["--out", str(occupied)], "--force")):
         done = spread(*extra)
         check(done.returncode == 2, f"{extra}: exit code {done.returncode}, expected 2")
         check(named in done.stderr, f"{extra}: the message does not name {named}: {done.stderr}")
+    broken = work / "broken"
+    shutil.copytree(sequence, broken)
+    lines = (broken / "rgb.txt").read_text().splitlines()
+    lines[5] = "1.2.3 rgb/x.png"
+    (broken / "rgb.txt").write_text("\n".join(lines) + "\n")
+    done = subprocess.run([sys.executable, str(args.script), "--tools", str(args.tools), "--dataset", str(broken),
+                           "--out", str(work / "a")], capture_output=True, text=True)
+    check(done.returncode == 2 and f"{broken / 'rgb.txt'}:6:" in done.stderr,
+          f"a bad time stamp in rgb.txt line 6: exit code {done.returncode}, {done.stderr}")
     check(not (work / "a").exists(), "a refused run created its --out")
     check(sorted(p.name for p in occupied.iterdir()) == ["keep.txt"], "a refused run touched a non-empty --out")
     done = subprocess.run([sys.executable, str(args.script), "--tools", str(work), "--dataset", str(sequence),
                            "--out", str(work / "a")], capture_output=True, text=True)
     check(done.returncode == 2 and "cge_slam" in done.stderr, f"a --tools without cge_slam: {done.stderr}")
 
-    # Three runs of each configuration: the even grid over 0.9 .. 1.1 is 0.9, 1.0, 1.1; the default
-    # (1.0) runs first.
-    out = work / "spread"
+    def data_lines(path: Path) -> list:
+        return [line for line in path.read_text().splitlines() if line.strip() and not line.startswith("#")]
+
+    def check_statistics(out: Path, config: dict, ates: list, keyframes: list) -> None:
+        mean = sum(ates) / 3
+        sd = math.sqrt(sum((a - mean) ** 2 for a in ates) / 2)
+        ate = config["ate_rmse_m"]
+        check(math.isclose(ate["mean"], mean, rel_tol=1e-12), f"{config['name']}: mean {ate['mean']} vs {mean}")
+        check(math.isclose(ate["sd"], sd, rel_tol=1e-9, abs_tol=1e-15), f"{config['name']}: sd {ate['sd']} vs {sd}")
+        check(ate["min"] == min(ates) and ate["max"] == max(ates), f"{config['name']}: min/max")
+        check(config["keyframes"]["mean"] == sum(keyframes) / 3, f"{config['name']}: keyframes")
+        row = f"| cge_slam {config['name']} | 3 | {1000 * mean:.1f} mm |"
+        check(row in (out / "spread.txt").read_text(), f"spread.txt has no row starting '{row}'")
+
+    # The start_offset family (the default), three runs: round i skips the first i frames.
+    rgb = data_lines(sequence / "rgb.txt")
+    depth = data_lines(sequence / "depth.txt")
+    out = work / "offsets"
     done = spread("--runs", "3", "--jobs", "2", "--out", str(out))
-    check(done.returncode == 0, f"the run failed: {done.stderr}")
+    check(done.returncode == 0, f"the start_offset run failed: {done.stderr}")
     result = json.loads((out / "spread.json").read_text())
+    check(result["family"] == "start_offset" and result["start_offsets"] == [0, 2], f"family {result.get('family')}")
+    for config in result["configurations"]:
+        ates, keyframes = [], []
+        for offset, run in enumerate(config["runs"]):
+            summary = json.loads((Path(run["out"]) / "summary.json").read_text())
+            check(run["start_offset"] == offset, f"{config['name']}: run {offset} has offset {run['start_offset']}")
+            check(summary["frames"] == len(rgb) - offset,
+                  f"{config['name']}: offset {offset} ran {summary['frames']} frames, expected {len(rgb) - offset}")
+            if offset == 0:
+                check(summary["source"] == str(sequence.resolve()), f"offset 0 ran on {summary['source']}")
+            else:
+                cut = Path(summary["source"])
+                check(data_lines(cut / "rgb.txt") == rgb[offset:], f"offset {offset}: rgb.txt is not the list cut")
+                first = float(rgb[offset].split()[0])
+                kept = [line for line in depth if float(line.split()[0]) >= first - 0.02]
+                check(data_lines(cut / "depth.txt") == kept, f"offset {offset}: depth.txt is not the list cut")
+                check((cut / "groundtruth.txt").resolve() == (sequence / "groundtruth.txt").resolve(),
+                      f"offset {offset}: groundtruth.txt is not the sequence's")
+            ates.append(summary["ate"]["rmse_m"])
+            keyframes.append(summary["keyframes"])
+        check_statistics(out, config, ates, keyframes)
+
+    # The depth_sigma family, three runs of each configuration: the even grid over 0.9 .. 1.1 is
+    # 0.9, 1.0, 1.1; the default (1.0) runs first.
+    out = work / "spread"
+    done = spread("--family", "depth_sigma", "--runs", "3", "--jobs", "2", "--out", str(out))
+    check(done.returncode == 0, f"the depth_sigma run failed: {done.stderr}")
+    result = json.loads((out / "spread.json").read_text())
+    check(result["family"] == "depth_sigma", f"family {result.get('family')}")
     configs = result["configurations"]
     check([c["name"] for c in configs] == ["--mode none", "--mode YMK --segmentation none"],
           f"configurations {[c['name'] for c in configs]}")
@@ -86,17 +150,9 @@ def main() -> int:
         check(sigmas[0] == default == result["default_tracking_depth_sigma"], f"default weight {sigmas}")
         for got, factor in zip(sigmas[1:], (0.9, 1.1)):
             check(math.isclose(got, default * factor, rel_tol=1e-5), f"weight {got}, expected {default} x {factor}")
-        mean = sum(ates) / 3
-        sd = math.sqrt(sum((a - mean) ** 2 for a in ates) / 2)
-        ate = config["ate_rmse_m"]
-        check(math.isclose(ate["mean"], mean, rel_tol=1e-12), f"{config['name']}: mean {ate['mean']} vs {mean}")
-        check(math.isclose(ate["sd"], sd, rel_tol=1e-9, abs_tol=1e-15), f"{config['name']}: sd {ate['sd']} vs {sd}")
-        check(ate["min"] == min(ates) and ate["max"] == max(ates), f"{config['name']}: min/max")
-        check(config["keyframes"]["mean"] == sum(keyframes) / 3, f"{config['name']}: keyframes")
-        row = f"| cge_slam {config['name']} | 3 | {1000 * mean:.1f} mm |"
-        check(row in (out / "spread.txt").read_text(), f"spread.txt has no row starting '{row}'")
+        check_statistics(out, config, ates, keyframes)
     check("| ORB-SLAM2 |" not in (out / "spread.txt").read_text(), "a peer row without --orbslam2")
-    print("ate_spread.py: arguments, weights and statistics as expected")
+    print("ate_spread.py: arguments, offsets, weights and statistics as expected")
     return 0
 
 
