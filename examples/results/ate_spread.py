@@ -124,8 +124,9 @@ def describe(result: dict) -> str:
     """One sentence on the family a result was measured over, for reports."""
     if result.get("family", "depth_sigma") == "start_offset":
         first, last = result.get("start_offsets", [0, result["runs"] - 1])
-        return (f"round i starts both systems i frames into the sequence ({first} .. {last} frames skipped), "
-                "so every run sees the same input as its round's ORB-SLAM2 run")
+        peer = " and ORB-SLAM2" if result.get("orbslam2") else ""
+        return (f"round i starts every configuration{peer} i frames into the sequence ({first} .. {last} frames "
+                "skipped), so the runs of a round see the same input")
     low, high = result.get("weights", [LOWEST, HIGHEST])
     sigma = result.get("default_tracking_depth_sigma")
     shown = f" {sigma:.4g} 1/m" if isinstance(sigma, (int, float)) else ""

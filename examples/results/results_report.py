@@ -303,7 +303,7 @@ def real_data_spread(ctx: Context) -> list[str]:
     lines = [f"### {ctx.real_data}: ATE over families of runs", "",
              "Our runs are deterministic, so each cell above is a single draw; on these real frames a small change "
              "to the input or to a setting moves YMK's ATE by millimetres. Here each mode runs as a family: "
-             f"{ate_spread.describe(result)}; ORB-SLAM2 runs as many times, alternating "
+             f"{ate_spread.describe(result)}{'; ORB-SLAM2 runs once a round, before ours' if result.get('orbslam2') else ''} "
              "(`examples/results/ate_spread.py`; docs/REAL_DATA.md has the same with YOLOv8-seg).", ""]
     lines += ate_spread.table(result).splitlines()
     return lines + [""]
