@@ -601,6 +601,9 @@ def loop_section(ctx: Context) -> list[str]:
     lines += ["Scene validity: a loop scene can show what graph entropy adds only if BoW alone misses some "
               "revisits there at precision 1 (event recall below 1, as the paper's 6/8 and 7/8): " +
               "; ".join(validity) + ".", ""]
+    lines += ["ATE: on these scenes the global bundle adjustment after a correction leaves the trajectory worse "
+              "than the pose graph alone, since no map point is shared across an accepted loop (a known problem, measured in docs/LOOP_CLOSING.md, "
+              "\"The global BA undoes the loop correction\").", ""]
     lines += loop_settings_used(ctx)
     lines += ["The P-R curves apply a rising threshold to the score that gates each scoring (S_sum, or the "
               "BoW score for BoW only) of the loops the run accepted (`cge_eval loops --curve`); thresholds "
