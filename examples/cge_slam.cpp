@@ -253,8 +253,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   app.add_option("--coverage-guard-ratio", opt.coverage_guard_ratio,
-                 "mode YMK: insert a keyframe when the close points tracked fall under this fraction of the "
-                 "reference keyframe's (ours, not the paper's; 0: off)")
+                 "mode YMK: insert a keyframe when the frame tracks under this fraction of its own close points "
+                 "(ours, not the paper's; 0: off)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   app.add_option("--semantic-instances", opt.semantic_instances,

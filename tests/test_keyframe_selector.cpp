@@ -684,35 +684,38 @@ Summary with_close(Summary f, int tracked_close, int untracked_close) {
   return f;
 }
 
-TEST_CASE("selector: the coverage guard fires when close points tracked fall under the ratio of the reference's",
+TEST_CASE("selector: the coverage guard fires when the frame tracks under the ratio of its own close points",
           "[keyframe][rules]") {
-  Settings s = settings42();  // coverage ratio 0.3, more than 70 untracked close points
-  REQUIRE(s.coverage_ratio == 0.3);
+  Settings s = settings42();  // coverage ratio 0.2, more than 70 untracked close points
+  REQUIRE(s.coverage_ratio == 0.2);
   REQUIRE(s.coverage_min_untracked_close == 70);
   Selector sel(s);
-  sel.step(with_close(frame(0, kRef, {}, 300), 200, 100));  // reference: 200 close points tracked
-  // 60 = 0.3 x 200 is not under the ratio; 59 with 70 untracked is not over the untracked count.
-  require_none(sel.step(with_close(frame(1, kRef, {}, 300), 60, 500)));
-  require_none(sel.step(with_close(frame(2, kRef, {}, 300), 59, 70)));
-  Decision d = sel.step(with_close(frame(3, kRef, {}, 300), 59, 71));
-  require_insert(d, Rule::coverage_guard, 3);
-  REQUIRE(d.measures.tracked_close_points == 59);
-  REQUIRE(d.measures.untracked_close_points == 71);
+  sel.step(with_close(frame(0, kRef, {}, 300), 200, 100));
+  // 100 of 500 close points is the ratio exactly (strict: no insertion); 99 of 499 is under it.
+  require_none(sel.step(with_close(frame(1, kRef, {}, 300), 100, 400)));
+  Decision d = sel.step(with_close(frame(2, kRef, {}, 300), 99, 400));
+  require_insert(d, Rule::coverage_guard, 2);
+  REQUIRE(d.measures.tracked_close_points == 99);
+  REQUIRE(d.measures.untracked_close_points == 400);
   REQUIRE(d.measures.reference_tracked_close_points == 200);
-  // The new reference tracked 59: 17 < 0.3 x 59 = 17.7 fires, 18 does not.
-  require_none(sel.step(with_close(frame(4, kRef, {}, 300), 18, 400)));
-  require_insert(sel.step(with_close(frame(5, kRef, {}, 300), 17, 400)), Rule::coverage_guard, 5);
+  // The reference's own count plays no part: a reference that tracked few close points (inserted
+  // by this guard, 99) does not silence the guard for the frames after it.
+  require_insert(sel.step(with_close(frame(3, kRef, {}, 300), 30, 200)), Rule::coverage_guard, 3);
+  // 17 of 88 is under 0.2, but 71 untracked are needed: 17 + 70 stays, 17 + 71 fires.
+  require_none(sel.step(with_close(frame(4, kRef, {}, 300), 17, 70)));
+  require_insert(sel.step(with_close(frame(5, kRef, {}, 300), 17, 71)), Rule::coverage_guard, 5);
+  // No close point tracked at all fires it too.
+  require_insert(sel.step(with_close(frame(6, kRef, {}, 300), 0, 71)), Rule::coverage_guard, 6);
   // After the tracking guard, before the semantic change.
-  require_insert(sel.step(with_close(frame(6, kRef, {}, 10), 0, 400)), Rule::tracking_guard, 6);
-  require_insert(sel.step(with_close(frame(7, kRef, {}, 10), 100, 0)), Rule::tracking_guard, 7);  // 100 close
+  require_insert(sel.step(with_close(frame(7, kRef, {}, 10), 0, 400)), Rule::tracking_guard, 7);
   require_insert(sel.step(with_close(frame(8, kRef, {P(1, 1), P(2, 2)}, 300), 10, 400)), Rule::coverage_guard, 8);
-  SECTION("counts not measured (-1) never fire it, in the frame or the reference") {
+  SECTION("counts not measured (-1) never fire it") {
     Selector unknown(s);
-    unknown.step(frame(0, kRef, {}, 300));  // the reference did not count close points
-    const Decision u = unknown.step(with_close(frame(1, kRef, {}, 300), 0, 500));
+    unknown.step(frame(0, kRef, {}, 300));
+    const Decision u = unknown.step(with_close(frame(1, kRef, {}, 300), -1, 500));
     require_none(u);
     REQUIRE(u.measures.reference_tracked_close_points == -1);
-    unknown.step(with_close(frame(2, kRef, {}, 10), 200, 100));  // tracking guard: a counted reference
+    require_none(unknown.step(with_close(frame(2, kRef, {}, 300), 0, -1)));
     require_none(unknown.step(frame(3, kRef, {}, 300)));
   }
   SECTION("switched off, or ratio 0") {
@@ -985,9 +988,9 @@ std::vector<OracleStep> oracle_run(const std::vector<RawFrame>& frames, const Se
       Rule immediate = Rule::none;
       if (s.use_tracking_guard && frames[j].tracked < s.tracking_floor) {
         immediate = Rule::tracking_guard;
-      } else if (s.use_coverage_guard && frames[j].tracked_close >= 0 && ref.tracked_close > 0 &&
+      } else if (s.use_coverage_guard && frames[j].tracked_close >= 0 &&
                  frames[j].untracked_close > s.coverage_min_untracked_close &&
-                 frames[j].tracked_close < s.coverage_ratio * ref.tracked_close) {
+                 frames[j].tracked_close < s.coverage_ratio * (frames[j].tracked_close + frames[j].untracked_close)) {
         immediate = Rule::coverage_guard;
       } else if (changed && held >= s.semantic_change_frames) {
         immediate = Rule::semantic_change;

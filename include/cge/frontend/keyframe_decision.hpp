@@ -19,7 +19,7 @@ enum class KeyframeRule : std::uint8_t {
   tracked_ratio,            ///< ORB-SLAM2 baseline: tracked points under ratio x the reference keyframe's
   max_frame_gap,            ///< ORB-SLAM2 baseline: max_frame_gap frames since the reference keyframe
   close_points,             ///< ORB-SLAM2 baseline: few close points tracked, many untracked
-  coverage_guard,           ///< patch policy: close points tracked fell against the reference's (ours)
+  coverage_guard,           ///< patch policy: the frame tracks too few of its own close points (ours)
 };
 
 /// Stable lower-case name of a rule, for logs and settings files.
@@ -71,7 +71,7 @@ struct KeyframeMeasures {
   // Patch policy's coverage guard (-1: the summary did not count close points).
   int tracked_close_points = -1;            ///< the frame's tracked close points
   int untracked_close_points = -1;          ///< the frame's untracked close points
-  int reference_tracked_close_points = -1;  ///< the reference keyframe's tracked close points at its step
+  int reference_tracked_close_points = -1;  ///< the reference keyframe's tracked close points at its step (logged only)
 };
 
 template <typename Scalar>

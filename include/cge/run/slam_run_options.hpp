@@ -46,7 +46,7 @@ struct SlamRunOptions {
   int keyframe_interval = PatchKeyframeSettings<double>{}.interval_frames;  ///< mode YMK: k
   /// Mode YMK: consecutive frames a semantic change must hold before it inserts a keyframe.
   int semantic_change_frames = PatchKeyframeSettings<double>{}.semantic_change_frames;
-  /// Mode YMK: the coverage guard's fraction of the reference keyframe's tracked close points (0: off).
+  /// Mode YMK: the coverage guard's fraction of the frame's own close points that must be tracked (0: off).
   double coverage_guard_ratio = PatchKeyframeSettings<double>{}.coverage_ratio;
   /// Mode YMK: which instances the keyframe rule's semantic terms count: all | dynamic.
   std::string semantic_instances = PatchKeyframeSettings<double>{}.dynamic_instances_only ? "dynamic" : "all";
