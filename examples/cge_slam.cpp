@@ -258,8 +258,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   app.add_option("--semantic-instances", opt.semantic_instances,
-                 "mode YMK: instances the keyframe rule's semantic change and centroid count: all (the paper) or "
-                 "dynamic (only dynamic classes, people by default)")
+                 "mode YMK: instances the keyframe rule's semantic change and centroid count: dynamic (ours: only "
+                 "dynamic classes, people by default) or all (the paper's rule)")
       ->check(CLI::IsMember({"all", "dynamic"}))
       ->capture_default_str();
   app.add_option("--out", opt.out, "output folder; must not exist or be empty, unless --force")->required();

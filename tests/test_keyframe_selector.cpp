@@ -366,7 +366,9 @@ TEST_CASE("make_frame_summary counts keypoints and keeps every instance centre",
   instances[0].dynamic = true;  // dynamic instances count too (all classes)
   instances[1].centre_px = P(500, 400);
   instances[1].class_id = 56;
-  const Selector selector(settings42());
+  cge::PatchKeyframeSettings<double> paper_rule = settings42();
+  paper_rule.dynamic_instances_only = false;  // the paper counts every instance
+  const Selector selector(paper_rule);
   const Summary s = selector.summarise(7, image, kps, instances, 123);
   REQUIRE(s.frame_id == 7);
   REQUIRE(s.grid == grid42());
@@ -1030,7 +1032,10 @@ std::vector<Decision> run(Selector& sel, const std::vector<RawFrame>& frames) {
         f.id, make_image(640, 480), f.keypoints,
         [&] {
           std::vector<cge::SemanticInstance<double>> inst(f.instances.size());
-          for (std::size_t i = 0; i < inst.size(); ++i) inst[i].centre_px = f.instances[i];
+          for (std::size_t i = 0; i < inst.size(); ++i) {
+            inst[i].centre_px = f.instances[i];
+            inst[i].dynamic = true;  // counted under either setting of dynamic_instances_only, as the oracle does
+          }
           return inst;
         }(),
         f.tracked);

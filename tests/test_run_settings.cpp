@@ -59,14 +59,14 @@ TEST_CASE("run settings: the System's settings from the options", "[run][setting
   opt.local_ba_iterations_per_frame = 4;
   opt.local_ba_solver = "ceres";
   opt.tracking_solver = "ceres";
-  opt.semantic_instances = "dynamic";
+  opt.semantic_instances = "all";
   const cge::slam::SystemSettings s = cge::run::system_settings_from(opt);
   CHECK(s.local_mapping.bundle.backend == cge::BundleAdjustmentBackend::ceres);
   CHECK(defaults.local_mapping.bundle.backend == cge::BundleAdjustmentBackend::schur_lm);
   CHECK(s.tracker.refinement.backend == cge::PoseRefinementBackend::ceres);
   CHECK(defaults.tracker.refinement.backend == cge::PoseRefinementBackend::pose_lm);
-  CHECK(s.patch_keyframes.dynamic_instances_only);
-  CHECK_FALSE(defaults.patch_keyframes.dynamic_instances_only);
+  CHECK_FALSE(s.patch_keyframes.dynamic_instances_only);
+  CHECK(defaults.patch_keyframes.dynamic_instances_only);
   CHECK(s.local_mapping.ba_iterations_per_frame == 4);
   CHECK(defaults.local_mapping.ba_iterations_per_frame == 0);  // whole rounds unless asked
   CHECK(s.patch_keyframes.interval_frames == 7);

@@ -33,8 +33,9 @@ struct FrameSummary {
   /// features the tracker keeps (normally those left after dynamic-feature elimination). Only the
   /// patch policy reads it; the ORB-SLAM2 baseline accepts it empty.
   std::vector<int> patch_counts;
-  /// Centres of this frame's semantic instances, all classes (dynamic ones included), pixels.
-  /// Their number is Num for the semantic-change rule.
+  /// Centres of the semantic instances the keyframe rule counts, pixels: make_frame_summary() keeps
+  /// all classes; PatchKeyframeSelector::summarise() only dynamic ones unless its settings say
+  /// otherwise. Their number is Num for the semantic-change rule.
   std::vector<Point> instance_centres_px;
   /// Map points tracked in this frame (inliers after pose optimisation), >= 0.
   int tracked_points = 0;
