@@ -71,7 +71,7 @@ struct KeyframeMeasures {
   // Patch policy's coverage guard (-1: the summary did not count close points).
   int tracked_close_points = -1;            ///< the frame's tracked close points
   int untracked_close_points = -1;          ///< the frame's untracked close points
-  int reference_tracked_close_points = -1;  ///< the reference keyframe's tracked close points at its step (logged only)
+  int reference_tracked_close_points = -1;  ///< the reference keyframe's tracked close points at its step (reported; no rule reads it)
 };
 
 template <typename Scalar>
