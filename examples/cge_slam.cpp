@@ -217,9 +217,13 @@ int main(int argc, char** argv) {
                  "Levenberg-Marquardt iterations per round of the local BA (its time budget per keyframe; 2 rounds)")
       ->check(CLI::Range(1, 1000));
   app.add_option("--local-ba-rounds-per-frame", opt.local_ba_rounds_per_frame,
-                 "local BA rounds solved per frame: 1 solves the first in the keyframe's frame and the second "
-                 "in the next frame before it is tracked, 2 both in the keyframe's frame (same outputs, other times)")
+                 "local BA rounds solved per frame, before it is tracked: 1 one round a frame, 2 both in one frame")
       ->check(CLI::Range(1, 2));
+  app.add_option("--local-ba-from-next-frame", opt.local_ba_from_next_frame,
+                 "on: the keyframe's frame does the map maintenance and the local BA's rounds start with the "
+                 "next frame; off: the keyframe's frame solves the first round (changes the trajectory)")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
   app.add_option("--local-ba-iterations-per-frame", opt.local_ba_iterations_per_frame,
                  "local BA iterations solved per frame, across its rounds, restarting from the current estimate "
                  "(0: whole rounds, --local-ba-rounds-per-frame; other values change the trajectory)")

@@ -88,6 +88,7 @@ inline nlohmann::ordered_json slam_summary_json(const cge::run::SlamRun& run) {
                            {"orb_spread", used.frame.orb.spread_oversampling},
                            {"local_ba_iterations", used.local_mapping.bundle.solver.max_iterations},
                            {"local_ba_rounds_per_frame", used.local_mapping.ba_rounds_per_frame},
+                           {"local_ba_from_next_frame", used.local_mapping.ba_from_next_frame},
                            {"local_ba_iterations_per_frame", used.local_mapping.ba_iterations_per_frame},
                            {"local_ba_solver", cge::bundle_adjustment_backend_name(used.local_mapping.bundle.backend)},
                            {"tracking_solver", cge::pose_refinement_backend_name(used.tracker.refinement.backend)},

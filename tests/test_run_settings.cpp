@@ -57,6 +57,7 @@ TEST_CASE("run settings: the System's settings from the options", "[run][setting
   opt.keyframe_interval = 7;
   opt.semantic_change_frames = 3;
   opt.local_ba_iterations_per_frame = 4;
+  opt.local_ba_from_next_frame = "off";
   opt.local_ba_solver = "ceres";
   opt.tracking_solver = "ceres";
   opt.semantic_instances = "all";
@@ -69,6 +70,8 @@ TEST_CASE("run settings: the System's settings from the options", "[run][setting
   CHECK(defaults.patch_keyframes.dynamic_instances_only);
   CHECK(s.local_mapping.ba_iterations_per_frame == 4);
   CHECK(defaults.local_mapping.ba_iterations_per_frame == 0);  // whole rounds unless asked
+  CHECK_FALSE(s.local_mapping.ba_from_next_frame);
+  CHECK(defaults.local_mapping.ba_from_next_frame);
   CHECK(s.patch_keyframes.interval_frames == 7);
   CHECK(s.patch_keyframes.semantic_change_frames == 3);
   CHECK(s.mode == cge::slam::DynamicMode::YM);

@@ -306,6 +306,49 @@ TEST_CASE("System with the local BA in iteration slices: tracks, is deterministi
   CHECK(translation_rmse_m(a, spec) < 0.01);
 }
 
+TEST_CASE("System: the local BA starts in the keyframe's frame or in the next one (ba_from_next_frame)",
+          "[slam][slices]") {
+  cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", 30, 3);
+  spec.people.clear();  // a static scene
+  const cge::sim::SequenceRenderer renderer(spec);
+  const std::map<int, int> classes = class_table(renderer);
+  for (const bool from_next_frame : {true, false}) {
+    cge::slam::SystemSettings settings;
+    settings.mode = DynamicMode::none;
+    settings.local_mapping.ba_from_next_frame = from_next_frame;
+    cge::slam::System system(settings, intrinsics_of(renderer.camera()));
+    // Per keyframe past the first two (the window then has poses to move besides the gauge): is it
+    // where tracking put it once its own frame is processed, and has it moved once the next is?
+    int checked = 0;
+    int unmoved_after_own_frame = 0;
+    int moved_after_next_frame = 0;
+    int waiting = -1;  // keyframe inserted in the previous frame
+    Eigen::Matrix4d tracked_pose;
+    for (int i = 0; i < renderer.frame_count(); ++i) {
+      const cge::sim::RenderedFrame f = renderer.render(i);
+      const cge::slam::FrameRecord record =
+          system.process(input_of(f), cge::slam::instances_from_label_image(f.instance_labels, classes, {}));
+      if (waiting >= 0) {
+        moved_after_next_frame += system.map().keyframe(waiting).T_world_camera.matrix() != tracked_pose;
+        waiting = -1;
+      }
+      if (record.keyframe_id < 2) continue;
+      ++checked;
+      tracked_pose = record.T_world_camera.matrix();
+      unmoved_after_own_frame += system.map().keyframe(record.keyframe_id).T_world_camera.matrix() == tracked_pose;
+      waiting = record.keyframe_id;
+    }
+    INFO("from the next frame: " << from_next_frame << ", keyframes checked " << checked);
+    REQUIRE(checked >= 3);
+    if (from_next_frame) {
+      CHECK(unmoved_after_own_frame == checked);
+      CHECK(moved_after_next_frame >= checked - 1);  // the last keyframe may have no next frame
+    } else {
+      CHECK(unmoved_after_own_frame == 0);
+    }
+  }
+}
+
 TEST_CASE("System: a frame without texture is reported lost, not a crash", "[slam]") {
   cge::slam::SystemSettings settings;
   settings.mode = DynamicMode::none;

@@ -99,6 +99,7 @@ slam::SystemSettings system_settings_from(const SlamRunOptions& opt) {
   settings.frame.orb.spread_oversampling = opt.orb_spread;
   settings.local_mapping.bundle.solver.max_iterations = opt.local_ba_iterations;
   settings.local_mapping.ba_rounds_per_frame = opt.local_ba_rounds_per_frame;
+  settings.local_mapping.ba_from_next_frame = opt.local_ba_from_next_frame == "on";
   settings.local_mapping.ba_iterations_per_frame = opt.local_ba_iterations_per_frame;
   settings.local_mapping.bundle.backend =
       opt.local_ba_solver == "schur_lm" ? BundleAdjustmentBackend::schur_lm : BundleAdjustmentBackend::ceres;

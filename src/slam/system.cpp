@@ -141,8 +141,8 @@ const FrameRecord& System::process(const FrameInput& input, const std::vector<Se
     record.moving_kept = moving.moving_kept;
   }
 
-  // The rounds of the previous keyframe's BA left for this frame, before it is tracked: the
-  // frame is tracked in the map as the whole BA leaves it.
+  // The rounds of the pending local BA due in this frame, before it is tracked: the frame is
+  // tracked in the map as those rounds leave it (LocalMappingSettings::ba_from_next_frame).
   advance_local_mapping(record, settings_.local_mapping.ba_rounds_per_frame);
 
   t = Clock::now();
@@ -366,10 +366,11 @@ void System::after_keyframe_inserted(int keyframe_id) {
   const auto start_local = Clock::now();
   local_mapping(keyframe_id);
   time_of(records_.back(), Stage::local_mapping) += elapsed_ms(start_local);
-  if (local_ba_ != nullptr) {
-    advance_local_mapping(records_.back(), settings_.local_mapping.ba_rounds_per_frame);
-  } else {
+  if (local_ba_ == nullptr) {
     complete_keyframe(keyframe_id, records_.back());
+  } else if (!settings_.local_mapping.ba_from_next_frame || local_ba_->done()) {
+    // Otherwise the next frame starts the rounds, before it is tracked (process).
+    advance_local_mapping(records_.back(), settings_.local_mapping.ba_rounds_per_frame);
   }
 }
 

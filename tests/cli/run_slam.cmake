@@ -11,8 +11,8 @@
 # 7. without --vocabulary a rendered run trains one on another preset, says so, closes loops and
 #    prints each accepted one and the precision and recalls, whose counts are those cge_eval loops
 #    computes from the loops.txt and loops.csv it wrote (when cge_eval is built); --vocabulary none
-#    switches loop closing off; a bad --preset, --preset with --dataset, a bad --cge-ties and a negative
-#    --local-ba-iterations-per-frame exit 2.
+#    switches loop closing off; a bad --preset, --preset with --dataset, a bad --cge-ties, a negative
+#    --local-ba-iterations-per-frame and a bad --local-ba-from-next-frame exit 2.
 cmake_minimum_required(VERSION 3.16)
 
 foreach(var EXE WORK)
@@ -206,6 +206,10 @@ endif()
 run_slam(2 ${args} --local-ba-iterations-per-frame -1 --out "${WORK}/bad")
 if(NOT last_stderr MATCHES "--local-ba-iterations-per-frame")
   message(FATAL_ERROR "a negative --local-ba-iterations-per-frame is not named: ${last_stderr}")
+endif()
+run_slam(2 ${args} --local-ba-from-next-frame yes --out "${WORK}/bad")
+if(NOT last_stderr MATCHES "--local-ba-from-next-frame")
+  message(FATAL_ERROR "a bad --local-ba-from-next-frame is not named: ${last_stderr}")
 endif()
 run_slam(2 ${args} --semantic-instances some --out "${WORK}/bad")
 if(NOT last_stderr MATCHES "--semantic-instances")

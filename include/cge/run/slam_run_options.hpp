@@ -53,6 +53,8 @@ struct SlamRunOptions {
   int orb_spread = slam::OrbSettings{}.spread_oversampling;
   int local_ba_iterations = slam::LocalMappingSettings{}.bundle.solver.max_iterations;
   int local_ba_rounds_per_frame = slam::LocalMappingSettings{}.ba_rounds_per_frame;
+  /// on: the local BA's rounds start with the frame after the keyframe's (ba_from_next_frame).
+  std::string local_ba_from_next_frame = slam::LocalMappingSettings{}.ba_from_next_frame ? "on" : "off";
   int local_ba_iterations_per_frame = slam::LocalMappingSettings{}.ba_iterations_per_frame;  ///< 0: whole rounds
   /// Local BA solver: ceres | schur_lm (BundleAdjustmentSettings::backend).
   std::string local_ba_solver = bundle_adjustment_backend_name(slam::LocalMappingSettings{}.bundle.backend);

@@ -51,9 +51,10 @@ BundleObservation keyframe_bundle_observation(const Keyframe& kf, int keypoint_i
                                               const OctaveScales& octave_scales, double depth_sigma_per_m);
 
 /// The local bundle adjustment of one keyframe's window, solved a round at a time so that the
-/// pipeline can spread its rounds over frames (LocalMappingSettings::ba_rounds_per_frame). Between
-/// rounds the map must not change structurally (no keyframe inserted or culled, no point erased or
-/// fused). Every round writes the window's poses and points into the map.
+/// pipeline can spread its rounds over frames (LocalMappingSettings::ba_rounds_per_frame and
+/// ba_from_next_frame). Between rounds the map must not change structurally (no keyframe inserted
+/// or culled, no point erased or fused). Every round writes the window's poses and points into the
+/// map.
 class LocalBundleAdjustment {
  public:
   /// Collects the window, its fixed observers, points and observations from the map (nothing is

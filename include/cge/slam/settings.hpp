@@ -193,13 +193,20 @@ struct LocalMappingSettings {
   int fixed_keyframes = 10;
   /// Depth standard deviation: sigma_z = depth_sigma_per_m * z^2 (Kinect-like growth), 1/m, > 0.
   double depth_sigma_per_m = 0.003;
-  /// Local-BA rounds solved per camera frame, >= 1: the keyframe's frame solves the first round,
-  /// the next frame the second before it is tracked, and only then are the keyframe's redundant
-  /// keyframes culled and its loop closed. Every frame is tracked in the map the whole BA leaves, as
-  /// before, and the outputs are the same byte for byte; only the time moves: a keyframe's frame no
-  /// longer carries the whole BA (ORB-SLAM2 runs it in a thread of its own). >= bundle.rounds solves
-  /// the whole BA in the keyframe's frame.
+  /// Local-BA rounds solved per camera frame, >= 1, each before the frame is tracked; once every
+  /// round is solved, the keyframe's redundant keyframes are culled and its loop closed. A
+  /// keyframe's frame then no longer carries the whole BA (ORB-SLAM2 runs it in a thread of its
+  /// own). >= bundle.rounds solves the whole BA in one frame.
   int ba_rounds_per_frame = 1;
+  /// Where the rounds start. true: the keyframe's own frame does the map maintenance and collects
+  /// the window, and the first round is solved by the next frame before it is tracked, so that
+  /// frame is tracked against the window as the first round leaves it (ORB-SLAM2's tracking goes on
+  /// while its mapping thread optimises). false: the keyframe's frame solves the first round itself
+  /// and every frame is tracked in the map the whole BA leaves. Ours, default true: on the real
+  /// fr1/rpy slice (nine start offsets) the 95th percentile of the time per frame falls from
+  /// 2.6-3.1x to 1.8-2.1x the median, the median rises 1-4 ms, ATE YMK 25.7 -> 25.7 mm, none
+  /// 25.1 -> 26.2 mm (within the offsets' spread; docs/REAL_DATA.md).
+  bool ba_from_next_frame = true;
   /// When > 0: Levenberg-Marquardt iterations of the pending local BA solved per camera frame,
   /// over rounds, instead of whole rounds (ba_rounds_per_frame is then unused). Each slice restarts
   /// the solver from the current estimate and writes it into the map, so the frames in between are
