@@ -233,6 +233,11 @@ int main(int argc, char** argv) {
                  "the Schur complement; same problem, rounds and tolerances)")
       ->check(CLI::IsMember({"ceres", "schur_lm"}))
       ->capture_default_str();
+  app.add_option("--tracking-ransac", opt.tracking_ransac,
+                 "local-map tracking: always (RANSAC EPnP on the prediction's matches, then the refinement) or "
+                 "on_failure (the refinement from the prediction first, RANSAC only when it fails, as ORB-SLAM2)")
+      ->check(CLI::IsMember({"always", "on_failure"}))
+      ->capture_default_str();
   app.add_option("--tracking-solver", opt.tracking_solver,
                  "tracking refinement solver: pose_lm (cge's own 6x6 Levenberg-Marquardt) or ceres; same problem, "
                  "rounds and tolerances")

@@ -306,6 +306,36 @@ TEST_CASE("System with the local BA in iteration slices: tracks, is deterministi
   CHECK(translation_rmse_m(a, spec) < 0.01);
 }
 
+TEST_CASE("System: local-map tracking from the prediction (RANSAC only on failure) tracks like RANSAC first",
+          "[slam]") {
+  cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", 30, 3);
+  spec.people.clear();  // a static scene
+  const cge::sim::SequenceRenderer renderer(spec);
+  cge::slam::SystemSettings ransac_first;
+  ransac_first.mode = DynamicMode::none;
+  ransac_first.tracker.ransac_only_on_failure = false;
+  cge::slam::SystemSettings from_prediction = ransac_first;
+  from_prediction.tracker.ransac_only_on_failure = true;
+  const cge::slam::System a = run_system(renderer, renderer.frame_count(), ransac_first);
+  const cge::slam::System b = run_system(renderer, renderer.frame_count(), from_prediction);
+  REQUIRE(a.frames().size() == b.frames().size());
+  double largest_gap_m = 0;
+  bool any_different = false;
+  for (std::size_t i = 0; i < a.frames().size(); ++i) {
+    REQUIRE(a.frames()[i].has_pose());
+    REQUIRE(b.frames()[i].has_pose());
+    const Eigen::Vector3d ta = a.pose_of(a.frames()[i]).translation();
+    const Eigen::Vector3d tb = b.pose_of(b.frames()[i]).translation();
+    largest_gap_m = std::max(largest_gap_m, (ta - tb).norm());
+    any_different = any_different || ta != tb;
+  }
+  INFO("RANSAC first " << translation_rmse_m(a, spec) << " m, from the prediction " << translation_rmse_m(b, spec)
+                       << " m, largest gap between them " << largest_gap_m << " m");
+  CHECK(any_different);  // the setting changes the path the pose takes
+  CHECK(largest_gap_m < 0.005);
+  CHECK(translation_rmse_m(b, spec) < 0.01);
+}
+
 TEST_CASE("System: the local BA starts in the keyframe's frame or in the next one (ba_from_next_frame)",
           "[slam][slices]") {
   cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", 30, 3);

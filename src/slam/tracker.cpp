@@ -191,13 +191,22 @@ bool Tracker::track_with_radius(const Frame& frame, const Map& map, const std::v
                                 const Eigen::Isometry3d& prediction, double radius_px, Attempt& out) const {
   std::vector<std::int64_t> matches;
   if (match_by_projection(frame, map, points, prediction, radius_px, matches) < settings_.min_matches) return false;
-  // RANSAC on the matches of the prediction, then the matches of that pose refined (the second
-  // search finds the points the prediction missed).
-  Eigen::Isometry3d T_ransac;
-  if (!ransac_pose(frame, map, matches, settings_.min_inliers, T_ransac)) return false;
-  if ((T_ransac.translation() - prediction.translation()).norm() > settings_.max_jump_m) return false;
-  if (!refine_with_local_map(frame, map, points, T_ransac, out)) return false;
-  return (out.T_world_camera.translation() - prediction.translation()).norm() <= settings_.max_jump_m;
+  // A first pose from the matches of the prediction (refined from the prediction, or RANSAC), then
+  // the matches of that pose refined (the second search finds the points the prediction missed).
+  const auto within_jump = [&](const Eigen::Isometry3d& T) {
+    return (T.translation() - prediction.translation()).norm() <= settings_.max_jump_m;
+  };
+  Eigen::Isometry3d T_first;
+  Attempt direct;
+  if (!(settings_.ransac_only_on_failure &&
+        refine_pose(frame, map, matches, prediction, settings_.min_inliers, direct) &&
+        within_jump(direct.T_world_camera))) {
+    if (!ransac_pose(frame, map, matches, settings_.min_inliers, T_first) || !within_jump(T_first)) return false;
+  } else {
+    T_first = direct.T_world_camera;
+  }
+  if (!refine_with_local_map(frame, map, points, T_first, out)) return false;
+  return within_jump(out.T_world_camera);
 }
 
 bool Tracker::track_local_map(const Frame& frame, const Map& map, const Eigen::Isometry3d& prediction,
