@@ -198,12 +198,13 @@ bool Tracker::track_with_radius(const Frame& frame, const Map& map, const std::v
   };
   Eigen::Isometry3d T_first;
   Attempt direct;
-  if (!(settings_.ransac_only_on_failure &&
-        refine_pose(frame, map, matches, prediction, settings_.min_inliers, direct) &&
-        within_jump(direct.T_world_camera))) {
-    if (!ransac_pose(frame, map, matches, settings_.min_inliers, T_first) || !within_jump(T_first)) return false;
-  } else {
+  const bool refined_from_prediction = settings_.ransac_only_on_failure &&
+                                       refine_pose(frame, map, matches, prediction, settings_.min_inliers, direct) &&
+                                       within_jump(direct.T_world_camera);
+  if (refined_from_prediction) {
     T_first = direct.T_world_camera;
+  } else if (!ransac_pose(frame, map, matches, settings_.min_inliers, T_first) || !within_jump(T_first)) {
+    return false;
   }
   if (!refine_with_local_map(frame, map, points, T_first, out)) return false;
   return within_jump(out.T_world_camera);

@@ -2,8 +2,9 @@
 // Tracker: the camera pose of each frame against the map (docs/METHOD.md section 8). Per frame:
 // constant-velocity prediction; projection of the local map's points (those seen by the last
 // keyframes and by the reference keyframe's covisible ones) into the frame and matching to its
-// static keypoints by descriptor in a window; PnP with RANSAC on the matches; refinement by
-// minimising reprojection error on the inliers; a quality check. A failure at the normal search
+// static keypoints by descriptor in a window; a first pose by PnP with RANSAC on those matches (or,
+// with ransac_only_on_failure, refined from the prediction and RANSAC only when that fails); a
+// second search from that pose and refinement by minimising reprojection error; a quality check. A failure at the normal search
 // radius is retried once with the wide radius (a wrong prediction gives enough matches, most of
 // them wrong, so the count alone does not reveal it). When both fail, odometry against the previous
 // frame (its static keypoints with depth as temporary points, as ORB-SLAM2's RGB-D motion model):
@@ -15,7 +16,7 @@
 // identity pose: the System makes it the first keyframe with map points from depth (RGB-D needs no two-view
 // initialisation).
 //
-// Refinement: PoseRefiner (cge/ceres/pose_refinement.hpp) on every match from the RANSAC pose; its
+// Refinement: PoseRefiner (cge/ceres/pose_refinement.hpp) on every match from the first pose; its
 // chi2 classification gives the inliers.
 //
 // Deterministic: cv::solvePnPRansac draws from its own fixed-seed generator, matching visits map
