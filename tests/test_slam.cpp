@@ -67,6 +67,13 @@ cge::slam::System run_system(const cge::sim::SequenceRenderer& renderer, int fra
   return run_system(renderer, frames, settings);
 }
 
+/// The walking_xyz preset (seed 3) with its people removed: a static scene of `frames` frames.
+cge::sim::SequenceSpec static_walking_xyz(int frames) {
+  cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", frames, 3);
+  spec.people.clear();
+  return spec;
+}
+
 /// Translation RMSE, metres, of the System's poses against the renderer's, both relative to frame 0.
 double translation_rmse_m(const cge::slam::System& system, const cge::sim::SequenceSpec& spec) {
   const Eigen::Isometry3d gt0_inv = spec.T_world_camera[0].inverse();
@@ -210,8 +217,7 @@ TEST_CASE("Map: invalid ids and keyframes are refused", "[slam]") {
 }
 
 TEST_CASE("System tracks a rendered static scene close to ground truth, and its map is consistent", "[slam]") {
-  cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", 40, 3);
-  spec.people.clear();  // a static scene
+  const cge::sim::SequenceSpec spec = static_walking_xyz(40);
   const cge::sim::SequenceRenderer renderer(spec);
   const int frames = renderer.frame_count();
   const cge::slam::System system = run_system(renderer, frames, DynamicMode::none);
@@ -283,8 +289,7 @@ TEST_CASE("System: same frames and settings give identical outputs", "[slam]") {
 
 TEST_CASE("System with the local BA in iteration slices: tracks, is deterministic, and is not whole rounds",
           "[slam][slices]") {
-  cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", 30, 3);
-  spec.people.clear();  // a static scene
+  const cge::sim::SequenceSpec spec = static_walking_xyz(30);
   const cge::sim::SequenceRenderer renderer(spec);
   cge::slam::SystemSettings whole;
   whole.mode = DynamicMode::none;
@@ -308,8 +313,7 @@ TEST_CASE("System with the local BA in iteration slices: tracks, is deterministi
 
 TEST_CASE("System: local-map tracking from the prediction (RANSAC only on failure) tracks like RANSAC first",
           "[slam]") {
-  cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", 30, 3);
-  spec.people.clear();  // a static scene
+  const cge::sim::SequenceSpec spec = static_walking_xyz(30);
   const cge::sim::SequenceRenderer renderer(spec);
   cge::slam::SystemSettings ransac_first;
   ransac_first.mode = DynamicMode::none;
@@ -338,8 +342,7 @@ TEST_CASE("System: local-map tracking from the prediction (RANSAC only on failur
 
 TEST_CASE("System: the local BA starts in the keyframe's frame or in the next one (ba_from_next_frame)",
           "[slam][slices]") {
-  cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", 30, 3);
-  spec.people.clear();  // a static scene
+  const cge::sim::SequenceSpec spec = static_walking_xyz(30);
   const cge::sim::SequenceRenderer renderer(spec);
   const std::map<int, int> classes = class_table(renderer);
   for (const bool from_next_frame : {true, false}) {
@@ -451,8 +454,7 @@ TEST_CASE("Settings: modes parse and bad values are refused", "[slam]") {
 
 TEST_CASE("Tracker: when the local map fails, odometry against the previous frame keeps the pose and says so",
           "[slam]") {
-  cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", 8, 3);
-  spec.people.clear();  // a static scene
+  const cge::sim::SequenceSpec spec = static_walking_xyz(8);
   const cge::sim::SequenceRenderer renderer(spec);
   const cge::PinholeIntrinsics<double> K = intrinsics_of(renderer.camera());
   cge::slam::SystemSettings settings;

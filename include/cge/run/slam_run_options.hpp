@@ -58,9 +58,9 @@ struct SlamRunOptions {
   int local_ba_iterations_per_frame = slam::LocalMappingSettings{}.ba_iterations_per_frame;  ///< 0: whole rounds
   /// Local BA solver: ceres | schur_lm (BundleAdjustmentSettings::backend).
   std::string local_ba_solver = bundle_adjustment_backend_name(slam::LocalMappingSettings{}.bundle.backend);
-  /// Tracking refinement solver: ceres | pose_lm (PoseRefinementSettings::backend).
   /// Local-map tracking's RANSAC: always | on_failure (TrackerSettings::ransac_only_on_failure).
   std::string tracking_ransac = slam::TrackerSettings{}.ransac_only_on_failure ? "on_failure" : "always";
+  /// Tracking refinement solver: ceres | pose_lm (PoseRefinementSettings::backend).
   std::string tracking_solver = pose_refinement_backend_name(slam::TrackerSettings{}.refinement.backend);
   /// Global BA solver after a loop correction: ceres | schur_lm (LoopCorrectionSettings::bundle).
   std::string global_ba_solver = bundle_adjustment_backend_name(slam::LoopCorrectionSettings{}.bundle.backend);

@@ -4,9 +4,9 @@
 // keyframes and by the reference keyframe's covisible ones) into the frame and matching to its
 // static keypoints by descriptor in a window; a first pose by PnP with RANSAC on those matches (or,
 // with ransac_only_on_failure, refined from the prediction and RANSAC only when that fails); a
-// second search from that pose and refinement by minimising reprojection error; a quality check. A failure at the normal search
-// radius is retried once with the wide radius (a wrong prediction gives enough matches, most of
-// them wrong, so the count alone does not reveal it). When both fail, odometry against the previous
+// second search from that pose and refinement by minimising reprojection error; a quality check.
+// A failure at the normal search radius is retried once with the wide radius (a wrong prediction
+// gives enough matches, most of them wrong, so the count alone does not reveal it). When both fail, odometry against the previous
 // frame (its static keypoints with depth as temporary points, as ORB-SLAM2's RGB-D motion model):
 // on a fast turn the view leaves the keyframes' map within a frame or two, and the few map points
 // the odometry pose still matches trigger the keyframe policy's tracking guard. When that fails too: relocalisation
