@@ -1,0 +1,196 @@
+#include "cge/slam/geometry/rigid_pose_ransac.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include <Eigen/SVD>
+
+#include "cge/core/splitmix64.hpp"
+
+namespace cge {
+namespace slam {
+
+void RigidPoseRansacSettings::validate() const {
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("RigidPoseRansacSettings: " + what);
+  };
+  if (max_iterations < 1) fail("max_iterations must be at least 1");
+  if (!(reprojection_px > 0) || !std::isfinite(reprojection_px)) fail("reprojection_px must be finite and > 0");
+  if (!(confidence > 0 && confidence < 1)) fail("confidence must be in (0, 1)");
+  const auto non_negative = [](double v) { return v >= 0 && std::isfinite(v); };
+  if (!non_negative(min_triangle_side_m)) fail("min_triangle_side_m must be finite and >= 0");
+  if (!non_negative(refit_tolerance_m)) fail("refit_tolerance_m must be finite and >= 0");
+  if (!non_negative(refit_tolerance_per_m)) fail("refit_tolerance_per_m must be finite and >= 0");
+}
+
+namespace {
+
+Eigen::Isometry3d fit_rigid_motion_at(const std::vector<Eigen::Vector3d>& world,
+                                      const std::vector<Eigen::Vector3d>& camera, const std::vector<int>& pairs) {
+  Eigen::Vector3d mean_world = Eigen::Vector3d::Zero();
+  Eigen::Vector3d mean_camera = Eigen::Vector3d::Zero();
+  for (const int i : pairs) {
+    mean_world += world[static_cast<std::size_t>(i)];
+    mean_camera += camera[static_cast<std::size_t>(i)];
+  }
+  const double n = static_cast<double>(pairs.size());
+  mean_world /= n;
+  mean_camera /= n;
+  // H = sum q p^T of the centred pairs; R = U diag(1, 1, det(U V^T)) V^T maximises trace(R^T H).
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (const int i : pairs) {
+    H += (camera[static_cast<std::size_t>(i)] - mean_camera) * (world[static_cast<std::size_t>(i)] - mean_world).transpose();
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) D(2, 2) = -1;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = svd.matrixU() * D * svd.matrixV().transpose();
+  T.translation() = mean_camera - T.linear() * mean_world;
+  return T;
+}
+
+bool spans_a_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                      double min_cross_norm) {
+  const double cross = (b - a).cross(c - a).norm();
+  return std::isfinite(cross) && cross > min_cross_norm;
+}
+
+/// The pairs whose point, moved by T, lies in front of the camera and reprojects within the threshold.
+struct Scorer {
+  const std::vector<Eigen::Vector3d>& world;
+  const std::vector<Eigen::Vector2d>& pixels;
+  const PinholeIntrinsics<double>& camera;
+  double threshold_sq_px;
+
+  bool inlier(const Eigen::Isometry3d& T, std::size_t i) const {
+    const Eigen::Vector3d p = T.linear() * world[i] + T.translation();
+    if (!(p.z() > 0)) return false;
+    const double du = camera.fx_px * p.x() / p.z() + camera.cx_px - pixels[i].x();
+    const double dv = camera.fy_px * p.y() / p.z() + camera.cy_px - pixels[i].y();
+    return du * du + dv * dv < threshold_sq_px;
+  }
+  int count(const Eigen::Isometry3d& T) const {
+    int n = 0;
+    for (std::size_t i = 0; i < world.size(); ++i) n += inlier(T, i) ? 1 : 0;
+    return n;
+  }
+  std::vector<int> inliers(const Eigen::Isometry3d& T) const {
+    std::vector<int> out;
+    for (std::size_t i = 0; i < world.size(); ++i) {
+      if (inlier(T, i)) out.push_back(static_cast<int>(i));
+    }
+    return out;
+  }
+};
+
+}  // namespace
+
+Eigen::Isometry3d fit_rigid_motion(const std::vector<Eigen::Vector3d>& points_world,
+                                   const std::vector<Eigen::Vector3d>& points_camera) {
+  if (points_world.size() != points_camera.size() || points_world.size() < 3) {
+    throw std::invalid_argument("fit_rigid_motion: needs at least three pairs of equal-sized point lists");
+  }
+  std::vector<int> all(points_world.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  return fit_rigid_motion_at(points_world, points_camera, all);
+}
+
+RigidPoseRansacResult solve_rigid_pose_ransac(const std::vector<Eigen::Vector3d>& points_world,
+                                              const std::vector<Eigen::Vector2d>& pixels_px,
+                                              const std::vector<Eigen::Vector3d>& points_camera_m,
+                                              const PinholeIntrinsics<double>& camera,
+                                              const RigidPoseRansacSettings& settings) {
+  settings.validate();
+  if (points_world.size() != pixels_px.size() || points_world.size() != points_camera_m.size()) {
+    throw std::invalid_argument("solve_rigid_pose_ransac: points_world, pixels_px and points_camera_m differ in size");
+  }
+  RigidPoseRansacResult result;
+  std::vector<int> with_depth;
+  std::vector<char> has_depth(points_world.size(), 0);
+  for (std::size_t i = 0; i < points_world.size(); ++i) {
+    if (points_camera_m[i].allFinite() && points_world[i].allFinite()) {
+      with_depth.push_back(static_cast<int>(i));
+      has_depth[i] = 1;
+    }
+  }
+  const auto m = static_cast<std::uint64_t>(with_depth.size());
+  if (m < 3) return result;
+
+  const Scorer scorer{points_world, pixels_px, camera, settings.reprojection_px * settings.reprojection_px};
+  const double min_cross = settings.min_triangle_side_m * settings.min_triangle_side_m;
+  const double log_miss = std::log(1.0 - settings.confidence);
+  SplitMix64 rng(settings.seed);
+  Eigen::Isometry3d best = Eigen::Isometry3d::Identity();
+  int best_count = -1;
+  double needed = static_cast<double>(settings.max_iterations);
+  std::vector<int> sample(3);
+  while (result.iterations < settings.max_iterations && result.iterations < needed) {
+    ++result.iterations;
+    const std::uint64_t a = rng.next() % m;
+    std::uint64_t b = rng.next() % (m - 1);
+    b += b >= a ? 1 : 0;
+    std::uint64_t c = rng.next() % (m - 2);
+    // The third index skips the two taken, in ascending order.
+    const std::uint64_t lo = a < b ? a : b;
+    const std::uint64_t hi = a < b ? b : a;
+    c += c >= lo ? 1 : 0;
+    c += c >= hi ? 1 : 0;
+    sample = {with_depth[a], with_depth[b], with_depth[c]};
+    const auto at = [&](const std::vector<Eigen::Vector3d>& v, int k) -> const Eigen::Vector3d& {
+      return v[static_cast<std::size_t>(sample[static_cast<std::size_t>(k)])];
+    };
+    if (!spans_a_triangle(at(points_world, 0), at(points_world, 1), at(points_world, 2), min_cross) ||
+        !spans_a_triangle(at(points_camera_m, 0), at(points_camera_m, 1), at(points_camera_m, 2), min_cross)) {
+      continue;
+    }
+    const Eigen::Isometry3d T = fit_rigid_motion_at(points_world, points_camera_m, sample);
+    if (!T.matrix().allFinite()) continue;
+    const int count = scorer.count(T);
+    if (count <= best_count) continue;
+    best_count = count;
+    best = T;
+    int depth_inliers = 0;
+    for (const int i : with_depth) depth_inliers += scorer.inlier(T, static_cast<std::size_t>(i)) ? 1 : 0;
+    const double w = static_cast<double>(depth_inliers) / static_cast<double>(m);
+    const double all_inlier = w * w * w;
+    if (all_inlier >= 1) {
+      needed = 0;
+    } else if (all_inlier > 0) {
+      needed = log_miss / std::log(1.0 - all_inlier);
+    }
+  }
+  if (best_count < 3) return result;
+
+  // The refit takes the inliers whose 3-D residual, too, is within the depth noise: reprojection
+  // barely sees a depth error along the ray (a keypoint on an edge reads the background's depth),
+  // while a least-squares fit in 3-D follows it.
+  std::vector<int> inliers = scorer.inliers(best);
+  std::vector<int> refit_pairs;
+  for (const int i : inliers) {
+    const auto k = static_cast<std::size_t>(i);
+    if (!has_depth[k]) continue;
+    const double z = points_camera_m[k].z();
+    const double tolerance_m = settings.refit_tolerance_m + settings.refit_tolerance_per_m * z * z;
+    if ((points_camera_m[k] - best * points_world[k]).norm() <= tolerance_m) refit_pairs.push_back(i);
+  }
+  if (refit_pairs.size() >= 3) {
+    const Eigen::Isometry3d refit = fit_rigid_motion_at(points_world, points_camera_m, refit_pairs);
+    if (refit.matrix().allFinite()) {
+      std::vector<int> refit_inliers = scorer.inliers(refit);
+      if (refit_inliers.size() >= inliers.size()) {
+        best = refit;
+        inliers = std::move(refit_inliers);
+      }
+    }
+  }
+  result.T_camera_world = best;
+  result.inliers = std::move(inliers);
+  result.ok = result.inliers.size() >= 3 && best.matrix().allFinite();
+  return result;
+}
+
+}  // namespace slam
+}  // namespace cge
