@@ -18,7 +18,7 @@ whole sequence at the default).
 Usage:
   ate_spread.py --tools build/examples --dataset ../shared/data/tum_fr1_rpy_300 --out DIR
                 [--family start_offset|depth_sigma] [--model ../shared/models/yolov8n-seg-320.onnx]
-                [--orbslam2 PEER_DIR [--orbslam2-run run.sh]] [--runs 9] [--jobs 2] [--force]
+                [--orbslam2 PEER_DIR [--orbslam2-run run.sh]] [--runs 9] [--jobs 1] [--force]
 Writes DIR/spread.json (every run) and DIR/spread.txt (the table, in Markdown), and prints the
 table. Exit code 2 for bad arguments (named), 1 when a run fails.
 """
@@ -166,7 +166,9 @@ def parse_arguments(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--orbslam2", type=Path, help="the folder the peer kit's build.sh made")
     parser.add_argument("--orbslam2-run", type=Path, default=results_peer.DEFAULT_RUN_SCRIPT, help="the peer kit's run.sh")
     parser.add_argument("--runs", type=int, default=9, help="runs per configuration (and of the peer), 1 .. 50")
-    parser.add_argument("--jobs", type=int, default=2, help="our runs at once within a round, 1 .. 16")
+    # One at a time by default: our times are serial per-frame times, and two of our runs at once
+    # share the machine's caches and memory while the peer runs alone.
+    parser.add_argument("--jobs", type=int, default=1, help="our runs at once within a round, 1 .. 16")
     parser.add_argument("--force", action="store_true", help="write into a non-empty --out")
     args = parser.parse_args(argv)
     if not 1 <= args.runs <= 50:
