@@ -234,9 +234,14 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"ceres", "schur_lm"}))
       ->capture_default_str();
   app.add_option("--tracking-ransac", opt.tracking_ransac,
-                 "local-map tracking: always (RANSAC EPnP on the prediction's matches, then the refinement) or "
+                 "local-map tracking: always (RANSAC on the prediction's matches, then the refinement) or "
                  "on_failure (the refinement from the prediction first, RANSAC only when it fails, as ORB-SLAM2)")
       ->check(CLI::IsMember({"always", "on_failure"}))
+      ->capture_default_str();
+  app.add_option("--tracking-ransac-solver", opt.tracking_ransac_solver,
+                 "hypotheses of tracking's RANSAC: epnp (OpenCV's EPnP on five matches) or rigid (three matches "
+                 "with depth fitted in 3-D); both score every match by its reprojection error")
+      ->check(CLI::IsMember({"epnp", "rigid"}))
       ->capture_default_str();
   app.add_option("--tracking-solver", opt.tracking_solver,
                  "tracking refinement solver: pose_lm (cge's own 6x6 Levenberg-Marquardt) or ceres; same problem, "

@@ -92,6 +92,7 @@ inline nlohmann::ordered_json slam_summary_json(const cge::run::SlamRun& run) {
                            {"local_ba_iterations_per_frame", used.local_mapping.ba_iterations_per_frame},
                            {"local_ba_solver", cge::bundle_adjustment_backend_name(used.local_mapping.bundle.backend)},
                            {"tracking_ransac", used.tracker.ransac_only_on_failure ? "on_failure" : "always"},
+                           {"tracking_ransac_solver", cge::slam::tracking_ransac_solver_name(used.tracker.ransac_solver)},
                            {"tracking_solver", cge::pose_refinement_backend_name(used.tracker.refinement.backend)},
                            {"global_ba_solver", cge::bundle_adjustment_backend_name(used.loop_correction.bundle.backend)},
                            {"map_maintenance", opt.map_maintenance},

@@ -61,6 +61,7 @@ TEST_CASE("run settings: the System's settings from the options", "[run][setting
   opt.local_ba_solver = "ceres";
   opt.tracking_solver = "ceres";
   opt.tracking_ransac = "on_failure";
+  opt.tracking_ransac_solver = "epnp";
   opt.semantic_instances = "all";
   const cge::slam::SystemSettings s = cge::run::system_settings_from(opt);
   CHECK(s.local_mapping.bundle.backend == cge::BundleAdjustmentBackend::ceres);
@@ -69,6 +70,8 @@ TEST_CASE("run settings: the System's settings from the options", "[run][setting
   CHECK(defaults.tracker.refinement.backend == cge::PoseRefinementBackend::pose_lm);
   CHECK(s.tracker.ransac_only_on_failure);
   CHECK_FALSE(defaults.tracker.ransac_only_on_failure);
+  CHECK(s.tracker.ransac_solver == cge::slam::TrackingRansacSolver::epnp);
+  CHECK(defaults.tracker.ransac_solver == cge::slam::TrackingRansacSolver::rigid);
   CHECK_FALSE(s.patch_keyframes.dynamic_instances_only);
   CHECK(defaults.patch_keyframes.dynamic_instances_only);
   CHECK(s.local_mapping.ba_iterations_per_frame == 4);

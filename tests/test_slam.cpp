@@ -340,6 +340,34 @@ TEST_CASE("System: local-map tracking from the prediction (RANSAC only on failur
   CHECK(translation_rmse_m(b, spec) < 0.01);
 }
 
+TEST_CASE("System: tracking's RANSAC from rigid or EPnP hypotheses keeps to the background with people walking "
+          "and no masks",
+          "[slam][slices]") {
+  // People walk through the view and mode none filters nothing: the pose must come from the
+  // consensus of the static background with either kind of hypothesis. The control, the refinement
+  // from the prediction without RANSAC, follows the people.
+  const cge::sim::SequenceSpec spec = cge::sim::make_preset("walking_xyz", 50, 1);
+  REQUIRE_FALSE(spec.people.empty());
+  const cge::sim::SequenceRenderer renderer(spec);
+  cge::slam::SystemSettings rigid;
+  rigid.mode = DynamicMode::none;
+  rigid.tracker.ransac_solver = cge::slam::TrackingRansacSolver::rigid;
+  cge::slam::SystemSettings epnp = rigid;
+  epnp.tracker.ransac_solver = cge::slam::TrackingRansacSolver::epnp;
+  cge::slam::SystemSettings no_ransac = rigid;
+  no_ransac.tracker.ransac_only_on_failure = true;
+  const cge::slam::System a = run_system(renderer, renderer.frame_count(), rigid);
+  const cge::slam::System b = run_system(renderer, renderer.frame_count(), epnp);
+  const cge::slam::System c = run_system(renderer, renderer.frame_count(), no_ransac);
+  const double rigid_m = translation_rmse_m(a, spec);
+  const double epnp_m = translation_rmse_m(b, spec);
+  const double no_ransac_m = translation_rmse_m(c, spec);
+  INFO("rigid " << rigid_m << " m, EPnP " << epnp_m << " m, no RANSAC " << no_ransac_m << " m");
+  CHECK(rigid_m < 0.02);
+  CHECK(epnp_m < 0.02);
+  CHECK(no_ransac_m > 2 * std::max(rigid_m, epnp_m));
+}
+
 TEST_CASE("System: the local BA starts in the keyframe's frame or in the next one (ba_from_next_frame)",
           "[slam][slices]") {
   const cge::sim::SequenceSpec spec = static_walking_xyz(30);

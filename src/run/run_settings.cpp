@@ -104,6 +104,8 @@ slam::SystemSettings system_settings_from(const SlamRunOptions& opt) {
   settings.local_mapping.bundle.backend =
       opt.local_ba_solver == "schur_lm" ? BundleAdjustmentBackend::schur_lm : BundleAdjustmentBackend::ceres;
   settings.tracker.ransac_only_on_failure = opt.tracking_ransac == "on_failure";
+  settings.tracker.ransac_solver =
+      opt.tracking_ransac_solver == "rigid" ? slam::TrackingRansacSolver::rigid : slam::TrackingRansacSolver::epnp;
   settings.tracker.refinement.backend =
       opt.tracking_solver == "ceres" ? PoseRefinementBackend::ceres : PoseRefinementBackend::pose_lm;
   settings.loop_correction.bundle.backend =

@@ -8,6 +8,7 @@
 
 #include "cge/slam/geometry/descriptor_matching.hpp"
 #include "cge/slam/geometry/pnp_ransac.hpp"
+#include "cge/slam/geometry/rigid_pose_ransac.hpp"
 
 namespace cge {
 namespace slam {
@@ -121,6 +122,9 @@ bool Tracker::ransac_pose(const Frame& frame, const Map& map, const std::vector<
 bool Tracker::ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
                           const std::vector<Eigen::Vector3d>& points_world, int min_inliers,
                           Eigen::Isometry3d& T_world_camera) const {
+  if (settings_.ransac_solver == TrackingRansacSolver::rigid) {
+    return rigid_ransac_pose(frame, keypoints, points_world, min_inliers, T_world_camera);
+  }
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
   for (std::size_t k = 0; k < keypoints.size(); ++k) {
@@ -137,6 +141,27 @@ bool Tracker::ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
   const PnpRansacResult solved = solve_pnp_ransac(object, image, intrinsics_, pnp);
   if (!solved.ok || static_cast<int>(solved.inliers.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
   T_world_camera = solved.T_camera_object.inverse();
+  return T_world_camera.matrix().allFinite();
+}
+
+bool Tracker::rigid_ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
+                                const std::vector<Eigen::Vector3d>& points_world, int min_inliers,
+                                Eigen::Isometry3d& T_world_camera) const {
+  if (static_cast<int>(keypoints.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
+  std::vector<Eigen::Vector2d> pixels(keypoints.size());
+  std::vector<Eigen::Vector3d> points_camera(keypoints.size());
+  for (std::size_t k = 0; k < keypoints.size(); ++k) {
+    const auto i = static_cast<std::size_t>(keypoints[k]);
+    pixels[k] = Eigen::Vector2d(frame.undistorted_px[i].x, frame.undistorted_px[i].y);
+    points_camera[k] = frame.points_camera_m[i];  // NaN without depth: scored, never sampled
+  }
+  RigidPoseRansacSettings ransac;
+  ransac.max_iterations = settings_.pnp_iterations;
+  ransac.reprojection_px = settings_.pnp_reprojection_px;
+  ransac.confidence = settings_.pnp_confidence;
+  const RigidPoseRansacResult solved = solve_rigid_pose_ransac(points_world, pixels, points_camera, intrinsics_, ransac);
+  if (!solved.ok || static_cast<int>(solved.inliers.size()) < std::max(kMinPnpPoints, min_inliers)) return false;
+  T_world_camera = solved.T_camera_world.inverse();
   return T_world_camera.matrix().allFinite();
 }
 

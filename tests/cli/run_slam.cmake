@@ -12,8 +12,8 @@
 #    prints each accepted one and the precision and recalls, whose counts are those cge_eval loops
 #    computes from the loops.txt and loops.csv it wrote (when cge_eval is built); --vocabulary none
 #    switches loop closing off; a bad --preset, --preset with --dataset, a bad --cge-ties, a negative
-#    --local-ba-iterations-per-frame, a bad --local-ba-from-next-frame and a bad --tracking-ransac
-#    exit 2.
+#    --local-ba-iterations-per-frame, a bad --local-ba-from-next-frame, a bad --tracking-ransac and
+#    a bad --tracking-ransac-solver exit 2.
 cmake_minimum_required(VERSION 3.16)
 
 foreach(var EXE WORK)
@@ -215,6 +215,10 @@ endif()
 run_slam(2 ${args} --tracking-ransac never --out "${WORK}/bad")
 if(NOT last_stderr MATCHES "--tracking-ransac")
   message(FATAL_ERROR "a bad --tracking-ransac is not named: ${last_stderr}")
+endif()
+run_slam(2 ${args} --tracking-ransac-solver p3p --out "${WORK}/bad")
+if(NOT last_stderr MATCHES "--tracking-ransac-solver")
+  message(FATAL_ERROR "a bad --tracking-ransac-solver is not named: ${last_stderr}")
 endif()
 run_slam(2 ${args} --semantic-instances some --out "${WORK}/bad")
 if(NOT last_stderr MATCHES "--semantic-instances")

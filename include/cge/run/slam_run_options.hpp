@@ -60,6 +60,8 @@ struct SlamRunOptions {
   std::string local_ba_solver = bundle_adjustment_backend_name(slam::LocalMappingSettings{}.bundle.backend);
   /// Local-map tracking's RANSAC: always | on_failure (TrackerSettings::ransac_only_on_failure).
   std::string tracking_ransac = slam::TrackerSettings{}.ransac_only_on_failure ? "on_failure" : "always";
+  /// Hypotheses of tracking's RANSAC: epnp | rigid (TrackerSettings::ransac_solver).
+  std::string tracking_ransac_solver = slam::tracking_ransac_solver_name(slam::TrackerSettings{}.ransac_solver);
   /// Tracking refinement solver: ceres | pose_lm (PoseRefinementSettings::backend).
   std::string tracking_solver = pose_refinement_backend_name(slam::TrackerSettings{}.refinement.backend);
   /// Global BA solver after a loop correction: ceres | schur_lm (LoopCorrectionSettings::bundle).

@@ -99,6 +99,15 @@ struct FrameSettings {
   DepthMADSettings mad;  ///< the filter of modes YM and YMK (r = 6 px and k = 1 the paper's, n = 100 ours)
 };
 
+/// Hypotheses of tracking's pose RANSAC. epnp: cv::solvePnPRansac, EPnP on five pixel matches,
+/// then EPnP on all inliers. rigid: three matches with depth fitted in 3-D (cge/slam/geometry/
+/// rigid_pose_ransac.hpp), then a 3-D refit on the inliers with depth.
+enum class TrackingRansacSolver : std::uint8_t { epnp, rigid };
+
+inline const char* tracking_ransac_solver_name(TrackingRansacSolver solver) {
+  return solver == TrackingRansacSolver::rigid ? "rigid" : "epnp";
+}
+
 /// Tracking: prediction, matching to the local map, PnP, quality check, relocalisation.
 struct TrackerSettings {
   int local_recent_keyframes = 5;      ///< local map: the last keyframes, count
@@ -112,7 +121,13 @@ struct TrackerSettings {
   int max_hamming = 64;              ///< matching: largest descriptor distance accepted, bits of 256
   double ratio = 0.9;                ///< matching: best distance < ratio * second best (within the window)
   int min_matches = 20;              ///< fewer matches than this: the attempt fails (see wide_search_factor)
-  int pnp_iterations = 100;          ///< RANSAC iterations of cv::solvePnPRansac
+  /// How tracking's RANSAC makes its pose hypotheses from the matches (both score every match by
+  /// its reprojection error at pnp_reprojection_px). Ours, default rigid: on the real fr1/rpy slice
+  /// (nine start offsets) the tracking stage falls from 4.5-4.6 to 2.0-2.2 ms a frame, ATE none
+  /// 26.2 -> 26.3 mm, YMK 25.7 -> 25.9 mm (within the offsets' spread); on the rendered walking
+  /// presets mode none 14.9/11.7/19.7/13.4 -> 12.1/10.6/17.2/12.2 mm, YMK unchanged (docs/REAL_DATA.md).
+  TrackingRansacSolver ransac_solver = TrackingRansacSolver::rigid;
+  int pnp_iterations = 100;          ///< RANSAC iterations at most (samples)
   double pnp_reprojection_px = 3.0;  ///< RANSAC inlier threshold, pixels
   double pnp_confidence = 0.99;      ///< RANSAC confidence, in (0, 1)
   /// Inliers under this after refinement: the frame is lost (ORB-SLAM2 RGB-D: 30 in the local map).
@@ -125,11 +140,12 @@ struct TrackerSettings {
   /// camera moves some centimetres per frame), metres.
   double max_jump_m = 0.3;
   /// Local-map tracking refines the pose from the prediction's matches directly and runs RANSAC
-  /// (EPnP) only when that refinement fails (short of min_inliers or beyond max_jump_m), as
-  /// ORB-SLAM2's motion-model tracking optimises from the prediction without RANSAC; false: RANSAC
-  /// on every frame's matches first. Default false: true halves the tracking stage on the real
-  /// fr1/rpy slice (5.1 -> 2.8 ms a frame; mode none 26.2 -> 23.8 mm, YMK 25.7 -> 25.6 mm over its
-  /// nine start offsets) but without dynamic filtering the refinement follows walking people that
+  /// only when that refinement fails (short of min_inliers or beyond max_jump_m), as ORB-SLAM2's
+  /// motion-model tracking optimises from the prediction without RANSAC; false: RANSAC on every
+  /// frame's matches first. Default false. Measured with EPnP hypotheses, true halved the tracking
+  /// stage on the real fr1/rpy slice (5.1 -> 2.8 ms a frame; mode none 26.2 -> 23.8 mm, YMK 25.7 ->
+  /// 25.6 mm over its nine start offsets; the rigid hypotheses now cost tens of microseconds, see
+  /// bench_pose_ransac.cpp), but without dynamic filtering the refinement follows walking people that
   /// RANSAC's consensus leaves out: mode none on the rendered walking presets 13-20 -> 142-530 mm
   /// (docs/REAL_DATA.md). For static scenes or with masks (YMK unchanged within 0.1 mm there).
   bool ransac_only_on_failure = false;

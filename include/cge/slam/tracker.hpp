@@ -101,6 +101,10 @@ class Tracker {
   bool ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
                    const std::vector<Eigen::Vector3d>& points_world, int min_inliers,
                    Eigen::Isometry3d& T_world_camera) const;
+  /// ransac_pose with TrackingRansacSolver::rigid.
+  bool rigid_ransac_pose(const Frame& frame, const std::vector<int>& keypoints,
+                         const std::vector<Eigen::Vector3d>& points_world, int min_inliers,
+                         Eigen::Isometry3d& T_world_camera) const;
   /// The projection search at radius_px with the tracker's descriptor tests.
   ProjectionSearch projection_search(double radius_px, bool require_in_image) const;
   /// `visible`, when given, receives the points that project into the image (ascending id).
