@@ -2,8 +2,9 @@
 // Tracker: the camera pose of each frame against the map (docs/METHOD.md section 8). Per frame:
 // constant-velocity prediction; projection of the local map's points (those seen by the last
 // keyframes and by the reference keyframe's covisible ones) into the frame and matching to its
-// static keypoints by descriptor in a window; a first pose by PnP with RANSAC on those matches (or,
-// with ransac_only_on_failure, refined from the prediction and RANSAC only when that fails); a
+// static keypoints by descriptor in a window; a first pose by RANSAC on those matches (hypotheses
+// from three matches with depth fitted in 3-D, or EPnP: TrackerSettings::ransac_solver; or, with
+// ransac_only_on_failure, refined from the prediction and RANSAC only when that fails); a
 // second search from that pose and refinement by minimising reprojection error; a quality check.
 // A failure at the normal search radius is retried once with the wide radius (a wrong prediction
 // gives enough matches, most of them wrong, so the count alone does not reveal it). When both fail, odometry against the previous
@@ -19,8 +20,9 @@
 // Refinement: PoseRefiner (cge/ceres/pose_refinement.hpp) on every match from the first pose; its
 // chi2 classification gives the inliers.
 //
-// Deterministic: cv::solvePnPRansac draws from its own fixed-seed generator, matching visits map
-// points and keypoints in id order, Ceres runs single-threaded.
+// Deterministic: the rigid RANSAC draws from a seeded splitmix64 and cv::solvePnPRansac from its own
+// fixed-seed generator, matching visits map points and keypoints in id order, Ceres runs
+// single-threaded.
 #include <cstdint>
 #include <functional>
 #include <vector>
