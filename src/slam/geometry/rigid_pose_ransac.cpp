@@ -72,9 +72,18 @@ struct Scorer {
     const double dv = camera.fy_px * p.y() / p.z() + camera.cy_px - pixels[i].y();
     return du * du + dv * dv < threshold_sq_px;
   }
-  int count(const Eigen::Isometry3d& T) const {
-    int n = 0;
-    for (std::size_t i = 0; i < world.size(); ++i) n += inlier(T, i) ? 1 : 0;
+  /// Inliers of T, all and those with depth, in one pass over the pairs.
+  struct Count {
+    int all = 0;
+    int with_depth = 0;
+  };
+  Count count(const Eigen::Isometry3d& T, const std::vector<char>& has_depth) const {
+    Count n;
+    for (std::size_t i = 0; i < world.size(); ++i) {
+      if (!inlier(T, i)) continue;
+      ++n.all;
+      n.with_depth += has_depth[i] ? 1 : 0;
+    }
     return n;
   }
   std::vector<int> inliers(const Eigen::Isometry3d& T) const {
@@ -126,7 +135,6 @@ RigidPoseRansacResult solve_rigid_pose_ransac(const std::vector<Eigen::Vector3d>
   Eigen::Isometry3d best = Eigen::Isometry3d::Identity();
   int best_count = -1;
   double needed = static_cast<double>(settings.max_iterations);
-  std::vector<int> sample(3);
   while (result.iterations < settings.max_iterations && result.iterations < needed) {
     ++result.iterations;
     const std::uint64_t a = rng.next() % m;
@@ -138,23 +146,21 @@ RigidPoseRansacResult solve_rigid_pose_ransac(const std::vector<Eigen::Vector3d>
     const std::uint64_t hi = a < b ? b : a;
     c += c >= lo ? 1 : 0;
     c += c >= hi ? 1 : 0;
-    sample = {with_depth[a], with_depth[b], with_depth[c]};
-    const auto at = [&](const std::vector<Eigen::Vector3d>& v, int k) -> const Eigen::Vector3d& {
-      return v[static_cast<std::size_t>(sample[static_cast<std::size_t>(k)])];
-    };
-    if (!spans_a_triangle(at(points_world, 0), at(points_world, 1), at(points_world, 2), min_cross) ||
-        !spans_a_triangle(at(points_camera_m, 0), at(points_camera_m, 1), at(points_camera_m, 2), min_cross)) {
+    const std::vector<int> sample = {with_depth[a], with_depth[b], with_depth[c]};
+    const auto x = static_cast<std::size_t>(sample[0]);
+    const auto y = static_cast<std::size_t>(sample[1]);
+    const auto z = static_cast<std::size_t>(sample[2]);
+    if (!spans_a_triangle(points_world[x], points_world[y], points_world[z], min_cross) ||
+        !spans_a_triangle(points_camera_m[x], points_camera_m[y], points_camera_m[z], min_cross)) {
       continue;
     }
     const Eigen::Isometry3d T = fit_rigid_motion_at(points_world, points_camera_m, sample);
     if (!T.matrix().allFinite()) continue;
-    const int count = scorer.count(T);
-    if (count <= best_count) continue;
-    best_count = count;
+    const Scorer::Count count = scorer.count(T, has_depth);
+    if (count.all <= best_count) continue;
+    best_count = count.all;
     best = T;
-    int depth_inliers = 0;
-    for (const int i : with_depth) depth_inliers += scorer.inlier(T, static_cast<std::size_t>(i)) ? 1 : 0;
-    const double w = static_cast<double>(depth_inliers) / static_cast<double>(m);
+    const double w = static_cast<double>(count.with_depth) / static_cast<double>(m);
     const double all_inlier = w * w * w;
     if (all_inlier >= 1) {
       needed = 0;
