@@ -19,14 +19,22 @@ Usage:
   ate_spread.py --tools build/examples --dataset ../shared/data/tum_fr1_rpy_300 --out DIR
                 [--family start_offset|depth_sigma] [--model ../shared/models/yolov8n-seg-320.onnx]
                 [--orbslam2 PEER_DIR [--orbslam2-run run.sh]] [--runs 9] [--jobs 1] [--force]
-Writes DIR/spread.json (every run) and DIR/spread.txt (the table, in Markdown), and prints the
-table. Exit code 2 for bad arguments (named), 1 when a run fails.
+Writes DIR/spread.json (every run) and DIR/spread.txt (the tables, in Markdown), and prints the
+tables: ATE and keyframes, then time per frame. Our time per frame is the serial total of every stage
+but the segmentation network (timings.csv's total_ms - segmentation_ms): features, dynamic filter,
+tracking, keyframe decision, local mapping, loop closing; its median over the frames of a run is set
+beside the median TrackRGBD time of the peer's run in the same round (ORB extraction, tracking and
+the keyframe decision; its local mapping and loop closing run in threads of their own). The 95th
+percentile interpolates linearly between the order statistics. Exit code 2 for bad arguments
+(named), 1 when a run fails or leaves a timings.csv that cannot be read (file and line named).
 """
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import math
+import statistics
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -116,9 +124,83 @@ def run_ours(tools: Path, dataset: Path, flags: list[str], sigma: str | None, ou
     ate = summary.get("ate") or {}
     if "rmse_m" not in ate:
         raise RuntimeError(f"{out}/summary.json: no ATE (does {dataset} have groundtruth.txt?)")
-    return {"tracking_depth_sigma": summary["mapping_settings"]["tracking_depth_sigma"],
-            "frames": summary["frames"], "ate_rmse_m": ate["rmse_m"], "keyframes": summary["keyframes"],
-            "out": str(out)}
+    run = {"tracking_depth_sigma": summary["mapping_settings"]["tracking_depth_sigma"],
+           "frames": summary["frames"], "ate_rmse_m": ate["rmse_m"], "keyframes": summary["keyframes"],
+           "out": str(out)}
+    run.update(serial_times(out / "timings.csv"))
+    return run
+
+
+TIMED_STAGES = ("features", "tracking", "local_mapping")  # the stages reported on their own
+
+
+def percentile(values: list[float], fraction: float) -> float:
+    """Linear interpolation between the order statistics (numpy's default): position
+    fraction * (n - 1) in the sorted values."""
+    ordered = sorted(values)
+    position = fraction * (len(ordered) - 1)
+    low = math.floor(position)
+    high = min(low + 1, len(ordered) - 1)
+    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
+
+
+def serial_times(timings: Path) -> dict:
+    """From one run's timings.csv: the median and 95th percentile over frames of the serial total
+    without the segmentation network (total_ms - segmentation_ms), their ratio, and the median of
+    each of TIMED_STAGES. Raises RuntimeError naming the file (and line) when it cannot be read."""
+    try:
+        with open(timings, encoding="utf-8", newline="") as f:
+            rows = list(csv.reader(f))
+    except OSError as e:
+        raise RuntimeError(f"{timings}: {e.strerror}") from e
+    if not rows:
+        raise RuntimeError(f"{timings}: empty")
+    header = rows[0]
+    wanted = ["total_ms", "segmentation_ms"] + [f"{stage}_ms" for stage in TIMED_STAGES]
+    missing = [name for name in wanted if name not in header]
+    if missing:
+        raise RuntimeError(f"{timings}:1: no column {', '.join(missing)}")
+    column = {name: header.index(name) for name in wanted}
+    totals: list[float] = []
+    stages: dict[str, list[float]] = {stage: [] for stage in TIMED_STAGES}
+    for number, row in enumerate(rows[1:], start=2):
+        try:
+            values = {name: float(row[index]) for name, index in column.items()}
+        except (IndexError, ValueError):
+            raise RuntimeError(f"{timings}:{number}: expected {len(header)} numbers, got '{','.join(row)}'") from None
+        if not all(math.isfinite(v) and v >= 0 for v in values.values()):
+            raise RuntimeError(f"{timings}:{number}: a time is negative or not finite")
+        totals.append(values["total_ms"] - values["segmentation_ms"])
+        for stage in TIMED_STAGES:
+            stages[stage].append(values[f"{stage}_ms"])
+    if not totals:
+        raise RuntimeError(f"{timings}: no frames")
+    median = statistics.median(totals)
+    p95 = percentile(totals, 0.95)
+    return {"total_median_ms": median, "total_p95_ms": p95, "p95_over_median": p95 / median if median > 0 else None,
+            "stage_median_ms": {stage: statistics.median(v) for stage, v in stages.items()}}
+
+
+def time_summary(runs: list[dict], peer_runs: list[dict] | None) -> dict:
+    """Over one configuration's runs: the spread of the median serial total and of p95 / median,
+    runs whose p95 is over 3x their median, and, when the peer ran, each round's ratio of our
+    median to the peer's TrackRGBD median in the same round (rounds without a peer time left out)
+    and the rounds where ours is the slower."""
+    summary = {"total_median_ms": results_peer.spread([r.get("total_median_ms") for r in runs]),
+               "p95_over_median": results_peer.spread([r.get("p95_over_median") for r in runs]),
+               "runs_over_3x": sum(1 for r in runs if (r.get("p95_over_median") or 0) > 3),
+               "stage_median_ms": {stage: results_peer.spread([r.get("stage_median_ms", {}).get(stage) for r in runs])
+                                   for stage in TIMED_STAGES}}
+    if peer_runs is not None:
+        ratios = []
+        for ours, peer in zip(runs, peer_runs):
+            theirs = peer.get("track_median_ms")
+            if isinstance(theirs, (int, float)) and theirs > 0 and isinstance(ours.get("total_median_ms"), float):
+                ratios.append(ours["total_median_ms"] / theirs)
+        summary["over_peer_median"] = results_peer.spread(ratios)
+        summary["rounds_compared"] = len(ratios)
+        summary["rounds_over"] = sum(1 for r in ratios if r > 1)
+    return summary
 
 
 def describe(result: dict) -> str:
@@ -151,6 +233,30 @@ def table(result: dict) -> str:
         lines.append(row("ORB-SLAM2", peer["ate_rmse_m"], peer["keyframes"]))
     for config in result["configurations"]:
         lines.append(row(f"cge_slam {config['name']}", config["ate_rmse_m"], config["keyframes"]))
+    return "\n".join(lines) + "\n"
+
+
+def time_table(result: dict) -> str:
+    """Time per frame, one row per configuration (and the peer's TrackRGBD median when it ran)."""
+    peer = result.get("orbslam2")
+    peer_times = results_peer.spread([r.get("track_median_ms") for r in peer["runs"]]) if peer else None
+
+    def span(s: dict | None, digits: int = 1, unit: str = " ms") -> str:
+        return f"{s['min']:.{digits}f}-{s['max']:.{digits}f}{unit}" if s else "-"
+
+    lines = ["| system | serial total median | / ORB-SLAM2's TrackRGBD median, mean (min - max) | rounds over | "
+             "p95 / median | runs over 3x | features median | tracking median | local mapping median |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    if peer_times:
+        lines.append(f"| ORB-SLAM2 (TrackRGBD) | {span(peer_times)} | 1.00x | - | - | - | - | - | - |")
+    for config in result["configurations"]:
+        t = config["time"]
+        ratio = t.get("over_peer_median")
+        ratio_cell = f"{ratio['mean']:.2f}x ({ratio['min']:.2f}-{ratio['max']:.2f})" if ratio else "-"
+        over = f"{t['rounds_over']} of {t['rounds_compared']}" if ratio else "-"
+        stages = [span(t["stage_median_ms"][stage]) for stage in TIMED_STAGES]
+        lines.append(f"| cge_slam {config['name']} | {span(t['total_median_ms'])} | {ratio_cell} | {over} | "
+                     f"{span(t['p95_over_median'], 2, '')} | {t['runs_over_3x']} | {' | '.join(stages)} |")
     return "\n".join(lines) + "\n"
 
 
@@ -264,14 +370,15 @@ def main(argv: list[str]) -> int:
         result["configurations"].append({
             "name": name, "flags": flags, "runs": runs,
             "ate_rmse_m": results_peer.spread([r["ate_rmse_m"] for r in runs]),
-            "keyframes": results_peer.spread([r["keyframes"] for r in runs])})
+            "keyframes": results_peer.spread([r["keyframes"] for r in runs]),
+            "time": time_summary(runs, peer_runs if peer is not None else None)})
     if peer is not None:
         good = [r for r in peer_runs if "error" not in r]
         result["orbslam2"] = {"runs": peer_runs, "failed": len(peer_runs) - len(good)}
         if good:
             result["orbslam2"]["ate_rmse_m"] = results_peer.spread([r["ate_rmse_m"] for r in good])
             result["orbslam2"]["keyframes"] = results_peer.spread([r["keyframes"] for r in good])
-    text = table(result)
+    text = table(result) + "\n" + time_table(result)
     (args.out / "spread.json").write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
     (args.out / "spread.txt").write_text(text, encoding="utf-8")
     print(text, end="")

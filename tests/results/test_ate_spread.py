@@ -4,12 +4,17 @@
 The oracle: for the start_offset family each run's frame count and its cut rgb.txt / depth.txt are
 checked against the sequence's own lists; for the depth_sigma family the weights are recomputed here
 from the default run's summary.json; for both the table's statistics are recomputed from each run's
-own summary.json with this file's arithmetic. Bad arguments must exit with code 2 and name the
-argument, leaving a non-empty --out untouched.
+own summary.json with this file's arithmetic, and the time per frame from each run's timings.csv
+(median and 95th percentile of total_ms - segmentation_ms, computed here). The comparison with the
+peer's TrackRGBD median is checked on hand-made runs with known ratios (the peer is not built here),
+and a broken timings.csv must be refused naming its file and line. Bad arguments must exit with
+code 2 and name the argument, leaving a non-empty --out untouched.
 
 Usage: test_ate_spread.py --script ate_spread.py --tools DIR_WITH_cge_slam_cge_eval --sim cge_sim --work DIR
 """
 import argparse
+import csv
+import importlib.util
 import json
 import math
 import shutil
@@ -83,6 +88,25 @@ def main() -> int:
     def data_lines(path: Path) -> list:
         return [line for line in path.read_text().splitlines() if line.strip() and not line.startswith("#")]
 
+    def check_times(config: dict) -> None:
+        medians, ratios = [], []
+        for run in config["runs"]:
+            with open(Path(run["out"]) / "timings.csv", newline="") as f:
+                totals = sorted(float(r["total_ms"]) - float(r["segmentation_ms"]) for r in csv.DictReader(f))
+            n = len(totals)
+            median = totals[n // 2] if n % 2 else (totals[n // 2 - 1] + totals[n // 2]) / 2
+            k = 0.95 * (n - 1)
+            p95 = totals[int(k)] * (1 - (k - int(k))) + totals[min(int(k) + 1, n - 1)] * (k - int(k))
+            check(math.isclose(run["total_median_ms"], median, rel_tol=1e-12), f"{config['name']}: median time")
+            check(math.isclose(run["total_p95_ms"], p95, rel_tol=1e-9), f"{config['name']}: p95 {run['total_p95_ms']} vs {p95}")
+            check(math.isclose(run["p95_over_median"], p95 / median, rel_tol=1e-9), f"{config['name']}: p95 / median")
+            medians.append(median)
+            ratios.append(p95 / median)
+        t = config["time"]
+        check(math.isclose(t["total_median_ms"]["max"], max(medians), rel_tol=1e-12), f"{config['name']}: max median")
+        check(t["runs_over_3x"] == sum(1 for r in ratios if r > 3), f"{config['name']}: runs over 3x")
+        check("over_peer_median" not in t, f"{config['name']}: a peer ratio without --orbslam2")
+
     def check_statistics(out: Path, config: dict, ates: list, keyframes: list) -> None:
         mean = sum(ates) / 3
         sd = math.sqrt(sum((a - mean) ** 2 for a in ates) / 2)
@@ -122,6 +146,38 @@ def main() -> int:
             ates.append(summary["ate"]["rmse_m"])
             keyframes.append(summary["keyframes"])
         check_statistics(out, config, ates, keyframes)
+        check_times(config)
+    check("| cge_slam --mode none |" in (out / "spread.txt").read_text().split("serial total median")[1],
+          "spread.txt has no time row for mode none")
+
+    # The time summary against a peer, on hand-made runs: our medians 10, 20, 30 ms against the
+    # peer's 20, 10, 40 ms (ratios 0.5, 2.0, 0.75; one round over), a round whose peer time is missing
+    # left out; p95 / median 2.0, 3.5, 1.0 (one run over 3x).
+    spec = importlib.util.spec_from_file_location("ate_spread", args.script)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    runs = [{"total_median_ms": 10.0, "p95_over_median": 2.0}, {"total_median_ms": 20.0, "p95_over_median": 3.5},
+            {"total_median_ms": 30.0, "p95_over_median": 1.0}, {"total_median_ms": 5.0, "p95_over_median": 1.5}]
+    peers = [{"track_median_ms": 20.0}, {"track_median_ms": 10.0}, {"track_median_ms": 40.0}, {"error": "log missing"}]
+    t = module.time_summary(runs, peers)
+    check(t["rounds_compared"] == 3 and t["rounds_over"] == 1, f"rounds {t['rounds_compared']} / over {t['rounds_over']}")
+    check(math.isclose(t["over_peer_median"]["mean"], (0.5 + 2.0 + 0.75) / 3, rel_tol=1e-12)
+          and t["over_peer_median"]["min"] == 0.5 and t["over_peer_median"]["max"] == 2.0, f"ratios {t['over_peer_median']}")
+    check(t["runs_over_3x"] == 1, f"runs over 3x: {t['runs_over_3x']}")
+    broken_timings = work / "timings.csv"
+    broken_timings.write_text("frame,segmentation_ms,features_ms,tracking_ms,local_mapping_ms,total_ms\n"
+                              "0,0,1,1,0,2\n1,0,x,1,0,2\n")
+    try:
+        module.serial_times(broken_timings)
+        fail("a timings.csv with 'x' for a time was read")
+    except RuntimeError as e:
+        check(f"{broken_timings}:3:" in str(e), f"the error does not name line 3: {e}")
+    broken_timings.write_text("frame,total_ms\n0,2\n")
+    try:
+        module.serial_times(broken_timings)
+        fail("a timings.csv without segmentation_ms was read")
+    except RuntimeError as e:
+        check(f"{broken_timings}:1:" in str(e) and "segmentation_ms" in str(e), f"the missing column: {e}")
 
     # The depth_sigma family, three runs of each configuration: the even grid over 0.9 .. 1.1 is
     # 0.9, 1.0, 1.1; the default (1.0) runs first.
