@@ -19,6 +19,10 @@ Usage:
   ate_spread.py --tools build/examples --dataset ../shared/data/tum_fr1_rpy_300 --out DIR
                 [--family start_offset|depth_sigma] [--model ../shared/models/yolov8n-seg-320.onnx]
                 [--orbslam2 PEER_DIR [--orbslam2-run run.sh]] [--runs 9] [--jobs 1] [--force]
+                [--configs none,ymk,ymk_yolo,ymk_yolo_all] [--variant LABEL=FLAGS ...]
+An A/B comparison of our own settings: --variant a= --variant b="--tracking-ransac-solver epnp" runs
+every chosen configuration once per variant, with the variant's flags added, alternating within
+each round (configuration 1 a, configuration 1 b, configuration 2 a, ...).
 Writes DIR/spread.json (every run) and DIR/spread.txt (the tables, in Markdown), and prints the
 tables: ATE and keyframes, then time per frame. Our time per frame is the serial total of every stage
 but the segmentation network (timings.csv's total_ms - segmentation_ms): features, dynamic filter,
@@ -34,6 +38,8 @@ import argparse
 import csv
 import json
 import math
+import re
+import shlex
 import statistics
 import subprocess
 import sys
@@ -64,6 +70,37 @@ def configurations(model: Path | None) -> list[tuple[str, str, list[str]]]:
         configs.append(("ymk_yolo_all", "the same, --semantic-instances all (the paper's rule)",
                         yolo + ["--semantic-instances", "all"]))
     return configs
+
+
+CONFIG_KEYS = ("none", "ymk", "ymk_yolo", "ymk_yolo_all")
+# Flags the script sets itself on every run of ours.
+RESERVED_FLAGS = ("--dataset", "--out", "--force", "--tracking-depth-sigma")
+
+
+def parse_variant(text: str) -> tuple[str, list[str]]:
+    """LABEL=FLAGS -> (label, flags). Raises UsageError naming the problem."""
+    label, sep, flags = text.partition("=")
+    if not sep or not re.fullmatch(r"[A-Za-z0-9_.-]+", label):
+        raise UsageError(f"--variant '{text}': give LABEL=FLAGS, LABEL of letters, digits, '_', '.', '-'")
+    try:
+        words = shlex.split(flags)
+    except ValueError as e:
+        raise UsageError(f"--variant '{text}': {e}") from None
+    for word in words:
+        if word.split("=")[0] in RESERVED_FLAGS:
+            raise UsageError(f"--variant '{text}': {word.split('=')[0]} is set by the script")
+    return label, words
+
+
+def with_variants(configs: list[tuple[str, str, list[str]]], chosen: list[str] | None,
+                  variants: list[tuple[str, list[str]]]) -> list[tuple[str, str, list[str]]]:
+    """The chosen configurations (all when None), each once per variant (LABEL added to its folder
+    key and its name, its flags after the configuration's), a configuration's variants adjacent."""
+    picked = [c for c in configs if chosen is None or c[0] in chosen]
+    if not variants:
+        return picked
+    return [(f"{key}_{label}", f"{name} [{label}]", flags + extra)
+            for key, name, flags in picked for label, extra in variants]
 
 
 def multipliers(runs: int) -> list[float]:
@@ -276,7 +313,23 @@ def parse_arguments(argv: list[str]) -> argparse.Namespace:
     # share the machine's caches and memory while the peer runs alone.
     parser.add_argument("--jobs", type=int, default=1, help="our runs at once within a round, 1 .. 16")
     parser.add_argument("--force", action="store_true", help="write into a non-empty --out")
+    parser.add_argument("--configs", help=f"comma-separated subset of {','.join(CONFIG_KEYS)} (default: all; the "
+                                          "two yolo ones need --model)")
+    parser.add_argument("--variant", action="append", default=[], metavar="LABEL=FLAGS",
+                        help="run each configuration once per variant, with FLAGS (cge_slam's) added; repeatable")
     args = parser.parse_args(argv)
+    args.variants = [parse_variant(v) for v in args.variant]
+    labels = [label for label, _ in args.variants]
+    if len(set(labels)) != len(labels):
+        raise UsageError(f"--variant: the labels {labels} repeat one")
+    args.chosen = None
+    if args.configs is not None:
+        args.chosen = [c.strip() for c in args.configs.split(",") if c.strip()]
+        unknown = [c for c in args.chosen if c not in CONFIG_KEYS]
+        if unknown or not args.chosen:
+            raise UsageError(f"--configs {args.configs}: give a comma-separated subset of {', '.join(CONFIG_KEYS)}")
+        if args.model is None and any(c.startswith("ymk_yolo") for c in args.chosen):
+            raise UsageError(f"--configs {args.configs}: the yolo configurations need --model")
     if not 1 <= args.runs <= 50:
         raise UsageError(f"--runs {args.runs}: give 1 .. 50")
     if not 1 <= args.jobs <= 16:
@@ -315,7 +368,7 @@ def main(argv: list[str]) -> int:
         print(f"ate_spread.py: {e}", file=sys.stderr)
         return 2
     tools, dataset = args.tools.resolve(), args.dataset.resolve()
-    configs = configurations(args.model.resolve() if args.model else None)
+    configs = with_variants(configurations(args.model.resolve() if args.model else None), args.chosen, args.variants)
     peer = (results_peer.Peer(args.orbslam2.resolve(), args.orbslam2_run.resolve())
             if args.orbslam2 is not None else None)
     runs_dir = args.out / "runs"

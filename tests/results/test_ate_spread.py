@@ -66,6 +66,13 @@ def main() -> int:
                          (["--orbslam2", str(work / "no_peer"), "--out", str(work / "a")], "--orbslam2"),
                          (["--family", "seeds", "--out", str(work / "a")], "--family"),
                          (["--runs", "12", "--out", str(work / "a")], "--runs"),  # 11 of 20 frames skipped
+                         (["--configs", "none,fast", "--out", str(work / "a")], "--configs"),
+                         (["--configs", "ymk_yolo", "--out", str(work / "a")], "--model"),
+                         (["--variant", "a", "--out", str(work / "a")], "--variant"),
+                         (["--variant", "a b=--mode none", "--out", str(work / "a")], "--variant"),
+                         (["--variant", "a=--out /tmp/x", "--out", str(work / "a")], "--out"),
+                         (["--variant", "a=--orb-spread '2", "--out", str(work / "a")], "--variant"),
+                         (["--variant", "a=", "--variant", "a=--mode none", "--out", str(work / "a")], "--variant"),
                          (["--out", str(occupied)], "--force")):
         done = spread(*extra)
         check(done.returncode == 2, f"{extra}: exit code {done.returncode}, expected 2")
@@ -178,6 +185,27 @@ def main() -> int:
         fail("a timings.csv without segmentation_ms was read")
     except RuntimeError as e:
         check(f"{broken_timings}:1:" in str(e) and "segmentation_ms" in str(e), f"the missing column: {e}")
+
+    # An A/B of our own settings: one configuration, two variants, alternating within each round; the
+    # variant's flags reach cge_slam (its summary.json says which RANSAC ran).
+    out = work / "variants"
+    done = spread("--runs", "2", "--configs", "none", "--variant", "a=", "--variant",
+                  "b=--tracking-ransac-solver epnp", "--out", str(out))
+    check(done.returncode == 0, f"the variant run failed: {done.stderr}")
+    result = json.loads((out / "spread.json").read_text())
+    names = [c["name"] for c in result["configurations"]]
+    check(names == ["--mode none [a]", "--mode none [b]"], f"variant configurations {names}")
+    for config, solver in zip(result["configurations"], ("rigid", "epnp")):
+        for run in config["runs"]:
+            summary = json.loads((Path(run["out"]) / "summary.json").read_text())
+            check(summary["mapping_settings"]["tracking_ransac_solver"] == solver,
+                  f"{config['name']}: ran {summary['mapping_settings']['tracking_ransac_solver']}, expected {solver}")
+            check(summary["mode"] == "none", f"{config['name']}: mode {summary['mode']}")
+        check_times(config)
+    for label in ("a", "b"):
+        check((out / "runs" / f"none_{label}_1").is_dir() and (out / "runs" / f"none_{label}_2").is_dir(),
+              f"the runs of variant {label} are not in runs/none_{label}_1 and _2")
+    check("| cge_slam --mode none [b] | 2 |" in (out / "spread.txt").read_text(), "spread.txt has no row for variant b")
 
     # The depth_sigma family, three runs of each configuration: the even grid over 0.9 .. 1.1 is
     # 0.9, 1.0, 1.1; the default (1.0) runs first.
