@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstddef>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <set>
@@ -351,6 +352,42 @@ TEST_CASE("align_rigid: degenerate inputs (one point, collinear points) and bad 
     CHECK(std::abs((A * m[i] - d[i]).norm() - (H * m[i] - d[i]).norm()) < 1e-9);
   CHECK_THAT(cge_test::invalid_argument_message([] { align_rigid({}, {}); }), Catch::Contains("no points"));
   CHECK_THAT(cge_test::invalid_argument_message([&] { align_rigid(m, one_d); }), Catch::Contains("differ in length"));
+}
+
+TEST_CASE("align_rigid over a subset: the fit of the copied pairs, bit for bit; bad subsets refused", "[metrics]") {
+  std::mt19937 rng(19);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  const Eigen::Isometry3d T = random_pose(rng, 3.0);
+  std::vector<Eigen::Vector3d> model, data;
+  for (int i = 0; i < 30; ++i) {
+    model.emplace_back(n01(rng), n01(rng), n01(rng));
+    data.push_back(T * model.back() + 0.02 * Eigen::Vector3d(n01(rng), n01(rng), n01(rng)));
+  }
+  const std::vector<std::vector<int>> subsets = {{4, 17, 9}, {0, 1, 2, 3, 29}, {28, 3, 11, 11, 6, 20, 14}};
+  for (const std::vector<int>& subset : subsets) {
+    std::vector<Eigen::Vector3d> m, d;
+    for (const int i : subset) {
+      m.push_back(model[static_cast<std::size_t>(i)]);
+      d.push_back(data[static_cast<std::size_t>(i)]);
+    }
+    INFO("subset of " << subset.size());
+    CHECK(align_rigid(model, data, subset.data(), subset.size()).matrix() == align_rigid(m, d).matrix());
+  }
+  const int out_of_range[] = {0, 30, 2};
+  const int negative[] = {0, -1, 2};
+  CHECK_THAT(cge_test::invalid_argument_message([&] { align_rigid(model, data, out_of_range, 3); }),
+             Catch::Contains("outside"));
+  CHECK_THAT(cge_test::invalid_argument_message([&] { align_rigid(model, data, negative, 3); }),
+             Catch::Contains("outside"));
+  CHECK_THAT(cge_test::invalid_argument_message([&] { align_rigid(model, data, negative, 0); }),
+             Catch::Contains("no points"));
+  std::vector<Eigen::Vector3d> shorter(data.begin(), data.end() - 1);
+  CHECK_THAT(cge_test::invalid_argument_message([&] { align_rigid(model, shorter, subsets[0].data(), 3); }),
+             Catch::Contains("differ in length"));
+  std::vector<Eigen::Vector3d> with_nan = data;
+  with_nan[17].x() = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THAT(cge_test::invalid_argument_message([&] { align_rigid(model, with_nan, subsets[0].data(), 3); }),
+             Catch::Contains("not finite"));
 }
 
 // ---- ATE --------------------------------------------------------------------------------------------

@@ -1,13 +1,13 @@
 #include "cge/slam/geometry/rigid_pose_ransac.hpp"
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
-#include <Eigen/SVD>
-
 #include "cge/core/splitmix64.hpp"
+#include "cge/metrics/rigid_alignment.hpp"
 
 namespace cge {
 namespace slam {
@@ -26,31 +26,6 @@ void RigidPoseRansacSettings::validate() const {
 }
 
 namespace {
-
-Eigen::Isometry3d fit_rigid_motion_at(const std::vector<Eigen::Vector3d>& world,
-                                      const std::vector<Eigen::Vector3d>& camera, const std::vector<int>& pairs) {
-  Eigen::Vector3d mean_world = Eigen::Vector3d::Zero();
-  Eigen::Vector3d mean_camera = Eigen::Vector3d::Zero();
-  for (const int i : pairs) {
-    mean_world += world[static_cast<std::size_t>(i)];
-    mean_camera += camera[static_cast<std::size_t>(i)];
-  }
-  const double n = static_cast<double>(pairs.size());
-  mean_world /= n;
-  mean_camera /= n;
-  // H = sum q p^T of the centred pairs; R = U diag(1, 1, det(U V^T)) V^T maximises trace(R^T H).
-  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-  for (const int i : pairs) {
-    H += (camera[static_cast<std::size_t>(i)] - mean_camera) * (world[static_cast<std::size_t>(i)] - mean_world).transpose();
-  }
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) D(2, 2) = -1;
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = svd.matrixU() * D * svd.matrixV().transpose();
-  T.translation() = mean_camera - T.linear() * mean_world;
-  return T;
-}
 
 bool spans_a_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                       double min_cross_norm) {
@@ -102,9 +77,7 @@ Eigen::Isometry3d fit_rigid_motion(const std::vector<Eigen::Vector3d>& points_wo
   if (points_world.size() != points_camera.size() || points_world.size() < 3) {
     throw std::invalid_argument("fit_rigid_motion: needs at least three pairs of equal-sized point lists");
   }
-  std::vector<int> all(points_world.size());
-  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
-  return fit_rigid_motion_at(points_world, points_camera, all);
+  return metrics::align_rigid(points_world, points_camera);
 }
 
 RigidPoseRansacResult solve_rigid_pose_ransac(const std::vector<Eigen::Vector3d>& points_world,
@@ -146,7 +119,7 @@ RigidPoseRansacResult solve_rigid_pose_ransac(const std::vector<Eigen::Vector3d>
     const std::uint64_t hi = a < b ? b : a;
     c += c >= lo ? 1 : 0;
     c += c >= hi ? 1 : 0;
-    const std::vector<int> sample = {with_depth[a], with_depth[b], with_depth[c]};
+    const std::array<int, 3> sample = {with_depth[a], with_depth[b], with_depth[c]};
     const auto x = static_cast<std::size_t>(sample[0]);
     const auto y = static_cast<std::size_t>(sample[1]);
     const auto z = static_cast<std::size_t>(sample[2]);
@@ -154,7 +127,7 @@ RigidPoseRansacResult solve_rigid_pose_ransac(const std::vector<Eigen::Vector3d>
         !spans_a_triangle(points_camera_m[x], points_camera_m[y], points_camera_m[z], min_cross)) {
       continue;
     }
-    const Eigen::Isometry3d T = fit_rigid_motion_at(points_world, points_camera_m, sample);
+    const Eigen::Isometry3d T = metrics::align_rigid(points_world, points_camera_m, sample.data(), sample.size());
     if (!T.matrix().allFinite()) continue;
     const Scorer::Count count = scorer.count(T, has_depth);
     if (count.all <= best_count) continue;
@@ -183,7 +156,8 @@ RigidPoseRansacResult solve_rigid_pose_ransac(const std::vector<Eigen::Vector3d>
     if ((points_camera_m[k] - best * points_world[k]).norm() <= tolerance_m) refit_pairs.push_back(i);
   }
   if (refit_pairs.size() >= 3) {
-    const Eigen::Isometry3d refit = fit_rigid_motion_at(points_world, points_camera_m, refit_pairs);
+    const Eigen::Isometry3d refit =
+        metrics::align_rigid(points_world, points_camera_m, refit_pairs.data(), refit_pairs.size());
     if (refit.matrix().allFinite()) {
       std::vector<int> refit_inliers = scorer.inliers(refit);
       if (refit_inliers.size() >= inliers.size()) {

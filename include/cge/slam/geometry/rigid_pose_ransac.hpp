@@ -57,8 +57,10 @@ struct RigidPoseRansacResult {
 };
 
 /// The rigid motion T minimising sum |q_i - T p_i|^2 over the pairs (p_i world, q_i camera),
-/// without scale, a proper rotation (det +1). Needs at least three pairs, not collinear; the
-/// result is unspecified (but finite) for collinear ones.
+/// without scale, a proper rotation (det +1): cge::metrics::align_rigid, the fit the ATE alignment
+/// uses, restricted to at least three pairs. Not collinear; the result is unspecified (but finite)
+/// for collinear ones. Throws std::invalid_argument for fewer than three pairs, lists of different
+/// sizes or a non-finite point.
 Eigen::Isometry3d fit_rigid_motion(const std::vector<Eigen::Vector3d>& points_world,
                                    const std::vector<Eigen::Vector3d>& points_camera);
 
